@@ -1,0 +1,1 @@
+//! Integration, conformance and compile-fail suites for the ULog workspace.
