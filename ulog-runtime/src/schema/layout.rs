@@ -67,6 +67,8 @@ pub struct Layout {
     pub payload_size: usize,
     /// One entry per field of the format, in declaration order.
     pub fields: Vec<FieldLayout>,
+    /// Nesting depth: 1 for a format of basic types only, 1 + the deepest nested type otherwise.
+    pub depth: usize,
 }
 
 impl Layout {
@@ -318,9 +320,13 @@ impl Schema {
     fn compute(&self, id: FormatId) -> Result<Layout, LayoutError> {
         let format = &self.formats[id.index()];
         let mut offset: u64 = 0;
+        let mut depth = 1;
         let mut fields = Vec::with_capacity(format.fields.len());
         for field in &format.fields {
             let (kind, elem_size) = self.element(format, field)?;
+            if let FieldKind::Nested(dep) = kind {
+                depth = depth.max(1 + self.resolved(dep).map_or(0, |l| l.depth));
+            }
             fields.push(FieldLayout {
                 name: field.name.clone(),
                 offset: offset as usize,
@@ -349,6 +355,7 @@ impl Schema {
             size,
             payload_size: size - trailing,
             fields,
+            depth,
         })
     }
 
@@ -454,6 +461,7 @@ mod tests {
         }
         s.insert("t20000:uint8_t v;".parse().unwrap()).unwrap();
         assert_eq!(s.layout_by_name("t0").unwrap().size, 1);
+        assert_eq!(s.layout_by_name("t0").unwrap().depth, 20_001);
     }
 
     #[test]

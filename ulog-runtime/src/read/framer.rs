@@ -1,0 +1,360 @@
+//! Finds message boundaries in a window of file bytes and recovers when they are lost.
+//!
+//! The framer is shared by the whole-file and the streaming reader: it sees a window
+//! `[base, base + window.len())` of the file and asks for more bytes when it needs them, so its
+//! memory use is bounded by two messages whatever the file size.
+//!
+//! A message is accepted when its content is *strongly* plausible on its own (a `D` whose
+//! `msg_id` is subscribed and whose size fits that format, an `S` carrying the sync magic, a
+//! key that looks like `type name`...), or when it is *weakly* plausible (known type, big
+//! enough) and the next header is weakly plausible too. Anything else means the boundary is
+//! lost: the framer scans forward, one byte at a time, from just after the last accepted
+//! message start, for a strongly plausible message followed by a plausible header (or for the
+//! sync magic), and reports the bytes it skipped. Starting the scan just after the last
+//! accepted message recovers the message that follows a damaged size field.
+
+use super::message::{
+    HEADER_LEN, MESSAGE_HEADER_LEN, MessageType, SYNC_MAGIC, u16_at,
+};
+
+/// What the framer found next.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Frame {
+    /// A message: header at `offset`, `size` payload bytes after the 3-byte header.
+    Message { offset: u64, ty: u8, size: u16 },
+    /// Bytes `[from, to)` were not part of any accepted message.
+    Skipped { from: u64, to: u64 },
+    /// The message at `prev` declared a size that runs into the message found at `next`.
+    Overlap { prev: u64, next: u64 },
+    /// A message at `offset` runs past the end of its segment or the file.
+    Truncated { offset: u64, declared: Option<u16>, available: u64 },
+    /// An appended-data offset of the flag bits that cannot be right.
+    BadAppendedOffset { offset: u64 },
+    /// More bytes are needed; bytes before `keep_from` will not be needed again.
+    NeedMore { keep_from: u64 },
+    /// No more messages.
+    End,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Plausibility {
+    Invalid,
+    Unknown,
+    Weak,
+    Strong,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Resync {
+    bad: u64,
+    bad_size: Option<u16>,
+    scan: u64,
+}
+
+/// Payload size range accepted for one `msg_id`, as message sizes (`2 + data`); empty if the
+/// id is not subscribed.
+#[derive(Debug, Clone, Copy)]
+struct SizeRange {
+    min: u16,
+    max: u16,
+}
+
+const UNSUBSCRIBED: SizeRange = SizeRange { min: u16::MAX, max: 0 };
+
+pub(crate) struct Framer {
+    pos: u64,
+    prev: Option<u64>,
+    floor: u64,
+    segment_end: u64,
+    segments: Vec<u64>,
+    notices: Vec<Frame>,
+    resync: Option<Resync>,
+    d_sizes: Vec<SizeRange>,
+}
+
+impl Framer {
+    pub(crate) fn new() -> Framer {
+        Framer {
+            pos: HEADER_LEN as u64,
+            prev: None,
+            floor: HEADER_LEN as u64,
+            segment_end: u64::MAX,
+            segments: Vec::new(),
+            notices: Vec::new(),
+            resync: None,
+            d_sizes: vec![UNSUBSCRIBED; 1 << 16],
+        }
+    }
+
+    /// Declares `msg_id` subscribed with data payloads of `min..=max` bytes.
+    pub(crate) fn subscribe(&mut self, msg_id: u16, min: usize, max: usize) {
+        let to_size = |n: usize| u16::try_from(n + 2).unwrap_or(u16::MAX);
+        self.d_sizes[usize::from(msg_id)] = SizeRange {
+            min: to_size(min),
+            max: to_size(max),
+        };
+    }
+
+    /// The next frame of the window `[base, base + w.len())`; `eof` says the window reaches the
+    /// end of the file.
+    pub(crate) fn next(&mut self, w: &[u8], base: u64, eof: bool) -> Frame {
+        if let Some(n) = self.notices.pop() {
+            return n;
+        }
+        let avail = base + w.len() as u64;
+        loop {
+            let end = if eof { self.segment_end.min(avail) } else { self.segment_end };
+            if let Some(rs) = self.resync {
+                return self.scan(w, base, avail, end, rs);
+            }
+            let p = self.pos;
+            if p >= end {
+                if end == self.segment_end && !self.segments.is_empty() {
+                    let next = self.segments.remove(0);
+                    self.segment_end = self.segments.first().copied().unwrap_or(u64::MAX);
+                    self.pos = next;
+                    self.floor = next;
+                    self.prev = None;
+                    continue;
+                }
+                if p > end && eof && end == avail {
+                    self.pos = end;
+                    return Frame::BadAppendedOffset { offset: p };
+                }
+                return Frame::End;
+            }
+            if p + MESSAGE_HEADER_LEN as u64 > end {
+                self.pos = end;
+                return Frame::Truncated { offset: p, declared: None, available: end - p };
+            }
+            let Some(h) = window(w, base, p, MESSAGE_HEADER_LEN) else {
+                return self.need_more(p);
+            };
+            let size = u16_at(h, 0);
+            let ty = h[2];
+            let msg_end = p + MESSAGE_HEADER_LEN as u64 + u64::from(size);
+            if msg_end > end {
+                self.fail(p, Some(size));
+                continue;
+            }
+            let Some(msg) = window(w, base, p, MESSAGE_HEADER_LEN + usize::from(size)) else {
+                return self.need_more(p);
+            };
+            let accepted = match self.plausibility(p, ty, &msg[MESSAGE_HEADER_LEN..]) {
+                Plausibility::Strong => true,
+                Plausibility::Invalid => false,
+                weak => match self.successor(w, base, avail, end, msg_end) {
+                    None => return self.need_more(p),
+                    Some(next) => {
+                        next == Plausibility::Strong
+                            || (weak == Plausibility::Weak && next == Plausibility::Weak)
+                    }
+                },
+            };
+            if !accepted {
+                self.fail(p, Some(size));
+                continue;
+            }
+            self.prev = Some(p);
+            self.pos = msg_end;
+            if ty == b'B' && p == HEADER_LEN as u64 {
+                self.read_flag_bits(&msg[MESSAGE_HEADER_LEN..], msg_end);
+            }
+            return Frame::Message { offset: p, ty, size };
+        }
+    }
+
+    fn need_more(&self, p: u64) -> Frame {
+        let keep_from = match self.prev {
+            Some(prev) => (prev + 1).max(self.floor).min(p),
+            None => p,
+        };
+        Frame::NeedMore { keep_from }
+    }
+
+    fn fail(&mut self, bad: u64, bad_size: Option<u16>) {
+        let scan = self.prev.map_or(bad + 1, |prev| prev + 1).max(self.floor);
+        self.resync = Some(Resync { bad, bad_size, scan });
+    }
+
+    /// How plausible the header at `msg_end` is, judged from its 3 bytes alone; `Strong`
+    /// stands for "the segment or file ends exactly here". `None`: bytes are missing.
+    fn successor(&self, w: &[u8], base: u64, avail: u64, end: u64, at: u64) -> Option<Plausibility> {
+        if at == end {
+            return Some(Plausibility::Strong);
+        }
+        if at + MESSAGE_HEADER_LEN as u64 > end {
+            return Some(Plausibility::Invalid);
+        }
+        if at + MESSAGE_HEADER_LEN as u64 > avail {
+            return None;
+        }
+        let h = window(w, base, at, MESSAGE_HEADER_LEN)?;
+        Some(header_plausibility(h))
+    }
+
+    fn plausibility(&self, offset: u64, ty: u8, p: &[u8]) -> Plausibility {
+        let Some(kind) = MessageType::from_byte(ty) else {
+            return if p.is_empty() { Plausibility::Invalid } else { Plausibility::Unknown };
+        };
+        if p.len() < kind.min_size() {
+            return Plausibility::Invalid;
+        }
+        let strong = match kind {
+            MessageType::Data => {
+                let range = self.d_sizes[usize::from(u16_at(p, 0))];
+                let size = p.len() as u16;
+                range.min <= size && size <= range.max
+            }
+            MessageType::Sync => p[..8] == SYNC_MAGIC,
+            MessageType::FlagBits => offset == HEADER_LEN as u64,
+            MessageType::Format => plausible_format(p),
+            MessageType::Info | MessageType::Parameter => plausible_key(p),
+            MessageType::MultiInfo => p[0] <= 1 && plausible_key(&p[1..]),
+            MessageType::DefaultParameter => (1..=3).contains(&p[0]) && plausible_key(&p[1..]),
+            MessageType::Subscribe => p[3..].iter().all(|&c| plausible_name_byte(c)),
+            MessageType::Unsubscribe | MessageType::Dropout => p.len() == 2,
+            MessageType::Logging | MessageType::TaggedLogging => {
+                matches!(p[0], b'0'..=b'7' | 0..=7)
+            }
+        };
+        if strong { Plausibility::Strong } else { Plausibility::Weak }
+    }
+
+    /// Learns the appended-data segments from the flag bits at offset 16.
+    fn read_flag_bits(&mut self, p: &[u8], after: u64) {
+        let Ok(super::message::Message::FlagBits(bits)) = super::message::Message::parse(b'B', p)
+        else {
+            return;
+        };
+        if !bits.has_data_appended() {
+            return;
+        }
+        let mut last = after;
+        for offset in bits.appended() {
+            if offset < last {
+                self.notices.push(Frame::BadAppendedOffset { offset });
+            } else {
+                self.segments.push(offset);
+                last = offset;
+            }
+        }
+        // The main data ends where the first appended segment starts.
+        self.segment_end = self.segments.first().copied().unwrap_or(u64::MAX);
+    }
+
+    fn scan(&mut self, w: &[u8], base: u64, avail: u64, end: u64, rs: Resync) -> Frame {
+        let mut q = rs.scan;
+        loop {
+            if q + MESSAGE_HEADER_LEN as u64 > end {
+                self.resync = None;
+                self.pos = end;
+                return match rs.bad_size {
+                    Some(size)
+                        if rs.bad + MESSAGE_HEADER_LEN as u64 + u64::from(size) > end
+                            && window(w, base, rs.bad + 2, 1)
+                                .is_some_and(|t| MessageType::from_byte(t[0]).is_some()) =>
+                    {
+                        Frame::Truncated {
+                            offset: rs.bad,
+                            declared: Some(size),
+                            available: end.saturating_sub(rs.bad + MESSAGE_HEADER_LEN as u64),
+                        }
+                    }
+                    _ => Frame::Skipped { from: rs.bad, to: end },
+                };
+            }
+            let Some(h) = window(w, base, q, MESSAGE_HEADER_LEN) else {
+                self.resync = Some(Resync { scan: q, ..rs });
+                return Frame::NeedMore { keep_from: q };
+            };
+            if h[0] == SYNC_MAGIC[0] {
+                match window(w, base, q, SYNC_MAGIC.len()) {
+                    Some(m) if m == SYNC_MAGIC => {
+                        let after = q + SYNC_MAGIC.len() as u64;
+                        if after > rs.bad && after <= end {
+                            return self.found(after, rs);
+                        }
+                    }
+                    None if q + SYNC_MAGIC.len() as u64 <= end => {
+                        self.resync = Some(Resync { scan: q, ..rs });
+                        return Frame::NeedMore { keep_from: q };
+                    }
+                    _ => {}
+                }
+            }
+            if header_plausibility(h) != Plausibility::Invalid && MessageType::from_byte(h[2]).is_some() {
+                let size = u16_at(h, 0);
+                let cand_end = q + MESSAGE_HEADER_LEN as u64 + u64::from(size);
+                if cand_end <= end {
+                    let Some(msg) = window(w, base, q, MESSAGE_HEADER_LEN + usize::from(size)) else {
+                        self.resync = Some(Resync { scan: q, ..rs });
+                        return Frame::NeedMore { keep_from: q };
+                    };
+                    if self.plausibility(q, h[2], &msg[MESSAGE_HEADER_LEN..]) == Plausibility::Strong
+                    {
+                        match self.successor(w, base, avail, end, cand_end) {
+                            None => {
+                                self.resync = Some(Resync { scan: q, ..rs });
+                                return Frame::NeedMore { keep_from: q };
+                            }
+                            Some(Plausibility::Weak | Plausibility::Strong) => {
+                                return self.found(q, rs);
+                            }
+                            Some(_) => {}
+                        }
+                    }
+                }
+            }
+            q += 1;
+        }
+    }
+
+    fn found(&mut self, at: u64, rs: Resync) -> Frame {
+        self.resync = None;
+        self.pos = at;
+        self.floor = at + 1;
+        if at > rs.bad {
+            Frame::Skipped { from: rs.bad, to: at }
+        } else {
+            Frame::Overlap { prev: self.prev.unwrap_or(rs.bad), next: at }
+        }
+    }
+}
+
+/// Judges a message header from its 3 bytes: known type and big enough.
+fn header_plausibility(h: &[u8]) -> Plausibility {
+    match MessageType::from_byte(h[2]) {
+        Some(kind) if usize::from(u16_at(h, 0)) >= kind.min_size() => Plausibility::Weak,
+        Some(_) => Plausibility::Invalid,
+        None if u16_at(h, 0) > 0 && h[2] != 0 => Plausibility::Unknown,
+        None => Plausibility::Invalid,
+    }
+}
+
+fn plausible_name_byte(c: u8) -> bool {
+    c.is_ascii_alphanumeric() || matches!(c, b'_' | b'-' | b'/')
+}
+
+/// `name:...;` with a plausible name.
+fn plausible_format(p: &[u8]) -> bool {
+    let Some(colon) = p.iter().position(|&c| c == b':') else {
+        return false;
+    };
+    colon > 0 && p[..colon].iter().all(|&c| plausible_name_byte(c)) && p.last() == Some(&b';')
+}
+
+/// `key_len`, then a printable key containing a space (`type name`).
+fn plausible_key(p: &[u8]) -> bool {
+    let key_len = usize::from(p[0]);
+    key_len >= 3
+        && 1 + key_len <= p.len()
+        && p[1..=key_len].iter().all(|&c| c.is_ascii_graphic() || c == b' ')
+        && p[1..=key_len].contains(&b' ')
+}
+
+/// The bytes `[at, at + len)` of the window, if it holds them.
+fn window(w: &[u8], base: u64, at: u64, len: usize) -> Option<&[u8]> {
+    let start = usize::try_from(at.checked_sub(base)?).ok()?;
+    w.get(start..start.checked_add(len)?)
+}

@@ -1,0 +1,675 @@
+//! What a log says besides its data rows: formats, info, parameters, subscriptions... and the
+//! interpreter ([`Metadata::apply`]) that turns each framed message into these records.
+
+use std::collections::HashMap;
+
+use super::message::{FileHeader, FlagBits, KeyValue, Message, KNOWN_VERSION};
+use crate::error::{Diagnostic, DiagnosticKind, ReadError};
+use crate::schema::{Field, Format, FormatId, Primitive, Schema, TypeRef};
+use crate::value::{RowPlan, Value};
+
+/// An `I` message: a typed, named value. Keys are unique; a later `I` replaces the value.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Info {
+    /// The name, e.g. `sys_name`.
+    pub key: String,
+    /// The declared type, e.g. `char[3]` or `uint32_t`.
+    pub type_name: String,
+    /// The value.
+    pub value: Value,
+}
+
+/// All `M` messages of one key: each list is one value and its continuations, in file order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MultiInfo {
+    /// The name.
+    pub key: String,
+    /// The declared type of the first part.
+    pub type_name: String,
+    /// One entry per value; each holds the value's parts (the first and its continuations).
+    pub values: Vec<Vec<Value>>,
+}
+
+/// A parameter value: parameters are `int32_t` or `float`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ParamValue {
+    /// `int32_t`
+    Int32(i32),
+    /// `float`
+    Float(f32),
+}
+
+impl ParamValue {
+    /// The value as `f64`.
+    pub fn as_f64(self) -> f64 {
+        match self {
+            ParamValue::Int32(v) => v.into(),
+            ParamValue::Float(v) => v.into(),
+        }
+    }
+}
+
+impl std::fmt::Display for ParamValue {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ParamValue::Int32(v) => write!(f, "{v}"),
+            ParamValue::Float(v) => write!(f, "{v}"),
+        }
+    }
+}
+
+/// A `P` message of the definitions section: a parameter's value when logging started.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Parameter {
+    /// The name.
+    pub name: String,
+    /// The value.
+    pub value: ParamValue,
+}
+
+/// A `P` message of the data section: a parameter changed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParameterChange {
+    /// The latest data timestamp seen before the change (as pyulog reports it), in µs.
+    pub timestamp: u64,
+    /// The name.
+    pub name: String,
+    /// The new value.
+    pub value: ParamValue,
+}
+
+/// A `Q` message: a default value of a parameter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DefaultParameter {
+    /// Bit 0: system-wide default; bit 1: default for the current configuration.
+    pub default_types: u8,
+    /// The name.
+    pub name: String,
+    /// The default value.
+    pub value: ParamValue,
+}
+
+impl DefaultParameter {
+    /// Bit 0 of `default_types`.
+    pub const SYSTEM: u8 = 1;
+    /// Bit 1 of `default_types`.
+    pub const CONFIGURATION: u8 = 2;
+}
+
+/// Severity of a logged string, as in the Linux kernel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum LogLevel {
+    /// `'0'`
+    Emergency,
+    /// `'1'`
+    Alert,
+    /// `'2'`
+    Critical,
+    /// `'3'`
+    Error,
+    /// `'4'`
+    Warning,
+    /// `'5'`
+    Notice,
+    /// `'6'`
+    Info,
+    /// `'7'`
+    Debug,
+}
+
+impl LogLevel {
+    /// The level of a raw level byte: ASCII `'0'..='7'` (what PX4 writes) or `0..=7`.
+    pub fn from_byte(b: u8) -> Option<LogLevel> {
+        const LEVELS: [LogLevel; 8] = [
+            LogLevel::Emergency,
+            LogLevel::Alert,
+            LogLevel::Critical,
+            LogLevel::Error,
+            LogLevel::Warning,
+            LogLevel::Notice,
+            LogLevel::Info,
+            LogLevel::Debug,
+        ];
+        LEVELS.get(usize::from(if b >= b'0' { b - b'0' } else { b })).copied()
+    }
+
+    /// The name pyulog prints: `EMERGENCY`, `ALERT`, `CRITICAL`, `ERROR`, `WARNING`, `NOTICE`,
+    /// `INFO`, `DEBUG`.
+    pub fn name(self) -> &'static str {
+        match self {
+            LogLevel::Emergency => "EMERGENCY",
+            LogLevel::Alert => "ALERT",
+            LogLevel::Critical => "CRITICAL",
+            LogLevel::Error => "ERROR",
+            LogLevel::Warning => "WARNING",
+            LogLevel::Notice => "NOTICE",
+            LogLevel::Info => "INFO",
+            LogLevel::Debug => "DEBUG",
+        }
+    }
+}
+
+/// An `L` or `C` message: a logged string.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoggedMessage {
+    /// The raw level byte (see [`LoggedMessage::level`]).
+    pub level_byte: u8,
+    /// The tag of a `C` message; `None` for `L`.
+    pub tag: Option<u16>,
+    /// Microseconds.
+    pub timestamp: u64,
+    /// The text (lossy UTF-8).
+    pub text: String,
+}
+
+impl LoggedMessage {
+    /// The level, if the byte is a known one.
+    pub fn level(&self) -> Option<LogLevel> {
+        LogLevel::from_byte(self.level_byte)
+    }
+}
+
+/// An `O` message: logging lost data.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Dropout {
+    /// The latest data timestamp seen before the dropout (as pyulog reports it), in µs.
+    pub timestamp: u64,
+    /// How long, in milliseconds.
+    pub duration_ms: u16,
+    /// File offset of the message.
+    pub offset: u64,
+}
+
+/// An `A` message: a topic instance and the id its data rows carry.
+#[derive(Debug, Clone)]
+pub struct Subscription {
+    /// Id used by `D` messages.
+    pub msg_id: u16,
+    /// Instance of the topic (0 for the first).
+    pub multi_id: u8,
+    /// The topic (format) name.
+    pub name: String,
+    /// File offset of the `A` message.
+    pub offset: u64,
+    pub(crate) format: Option<FormatId>,
+    pub(crate) sizes: Option<(usize, usize)>,
+    pub(crate) timestamp: Option<(usize, Primitive)>,
+    pub(crate) plan: Option<RowPlan>,
+    clock: Clock,
+}
+
+impl Subscription {
+    /// The format of the rows, if the subscription names a valid one.
+    pub fn format(&self) -> Option<FormatId> {
+        self.format
+    }
+
+    /// Accepted row lengths: without trailing padding up to the full size.
+    pub fn payload_sizes(&self) -> Option<(usize, usize)> {
+        self.sizes
+    }
+
+    /// Type of the `timestamp` field, if there is one.
+    pub fn timestamp_type(&self) -> Option<Primitive> {
+        self.timestamp.map(|(_, p)| p)
+    }
+}
+
+/// Unwraps version-0 timestamps of `uint32_t`, `uint16_t` or `uint8_t` (ms) into a
+/// monotonically increasing `u64` µs timeline, counting a wrap whenever the raw value goes
+/// back, and whole extra periods when dropouts since the last row last longer than that.
+#[derive(Debug, Clone, Copy, Default)]
+struct Clock {
+    last: Option<u64>,
+    base: u64,
+    dropout_mark: u64,
+}
+
+impl Clock {
+    fn unwrap(&mut self, primitive: Primitive, raw: u64, dropouts_us: u64) -> u64 {
+        let (modulus, scale) = match primitive {
+            Primitive::UInt64 => return raw,
+            Primitive::UInt32 => (1u64 << 32, 1),
+            Primitive::UInt16 => (1 << 16, 1),
+            _ => (1 << 8, 1000),
+        };
+        let period = modulus * scale;
+        let mut t = self.base + raw * scale;
+        if let Some(last) = self.last {
+            if t < last {
+                self.base += period;
+                t += period;
+            }
+            let lost = dropouts_us - self.dropout_mark;
+            while t + period <= last + lost {
+                self.base += period;
+                t += period;
+            }
+        }
+        self.last = Some(t);
+        self.dropout_mark = dropouts_us;
+        t
+    }
+}
+
+/// What one message changed, for the reader driving [`Metadata::apply`].
+#[derive(Debug)]
+pub(crate) enum Applied {
+    Nothing,
+    Subscribed { msg_id: u16, min: usize, max: usize },
+    Row { sub: usize, timestamp: u64 },
+    Logged(LoggedMessage),
+    Dropout(Dropout),
+    ParameterChange(ParameterChange),
+    Sync,
+    Diagnostic(Diagnostic),
+}
+
+/// Everything but data rows, accumulated message by message.
+#[derive(Debug, Clone)]
+pub struct Metadata {
+    pub(crate) header: FileHeader,
+    pub(crate) flag_bits: Option<FlagBits>,
+    pub(crate) schema: Schema,
+    pub(crate) info: Vec<Info>,
+    pub(crate) multi_info: Vec<MultiInfo>,
+    pub(crate) initial_parameters: Vec<Parameter>,
+    pub(crate) default_parameters: Vec<DefaultParameter>,
+    pub(crate) subscriptions: Vec<Subscription>,
+    by_msg_id: HashMap<u16, usize>,
+    in_data_section: bool,
+    last_timestamp: u64,
+    dropouts_us: u64,
+    pub(crate) sync_count: u64,
+}
+
+impl Metadata {
+    pub(crate) fn new(header: FileHeader) -> Metadata {
+        Metadata {
+            header,
+            flag_bits: None,
+            schema: Schema::new(),
+            info: Vec::new(),
+            multi_info: Vec::new(),
+            initial_parameters: Vec::new(),
+            default_parameters: Vec::new(),
+            subscriptions: Vec::new(),
+            by_msg_id: HashMap::new(),
+            in_data_section: false,
+            last_timestamp: header.start_timestamp,
+            dropouts_us: 0,
+            sync_count: 0,
+        }
+    }
+
+    /// A diagnostic for the header itself, if any.
+    pub(crate) fn header_diagnostic(&self) -> Option<Diagnostic> {
+        (self.header.version > KNOWN_VERSION).then(|| Diagnostic {
+            offset: 7,
+            kind: DiagnosticKind::UnknownVersion(self.header.version),
+        })
+    }
+
+    /// The file header.
+    pub fn header(&self) -> FileHeader {
+        self.header
+    }
+
+    /// The flag bits, for files that have them (version 1).
+    pub fn flag_bits(&self) -> Option<&FlagBits> {
+        self.flag_bits.as_ref()
+    }
+
+    /// All formats, with their layouts.
+    pub fn schema(&self) -> &Schema {
+        &self.schema
+    }
+
+    /// Info values, in order of first appearance.
+    pub fn info(&self) -> &[Info] {
+        &self.info
+    }
+
+    /// The info value of this key.
+    pub fn info_value(&self, key: &str) -> Option<&Value> {
+        self.info.iter().find(|i| i.key == key).map(|i| &i.value)
+    }
+
+    /// Multi info values by key, in order of first appearance.
+    pub fn multi_info(&self) -> &[MultiInfo] {
+        &self.multi_info
+    }
+
+    /// Parameters as logging started (the definitions section), in order of first appearance.
+    pub fn initial_parameters(&self) -> &[Parameter] {
+        &self.initial_parameters
+    }
+
+    /// Default parameters, in file order.
+    pub fn default_parameters(&self) -> &[DefaultParameter] {
+        &self.default_parameters
+    }
+
+    /// Subscriptions, in file order (including ones that never get data).
+    pub fn subscriptions(&self) -> &[Subscription] {
+        &self.subscriptions
+    }
+
+    /// Number of `S` sync messages read.
+    pub fn sync_count(&self) -> u64 {
+        self.sync_count
+    }
+
+    /// The latest data timestamp seen so far (starting at the header's), in µs.
+    pub fn last_timestamp(&self) -> u64 {
+        self.last_timestamp
+    }
+
+    /// Interprets one framed message.
+    pub(crate) fn apply(&mut self, offset: u64, msg: Message<'_>) -> Result<Applied, ReadError> {
+        let diag = |kind| Ok(Applied::Diagnostic(Diagnostic { offset, kind }));
+        match msg {
+            Message::FlagBits(bits) => {
+                if offset != super::message::HEADER_LEN as u64 || self.flag_bits.is_some() {
+                    return diag(DiagnosticKind::FlagBitsNotFirst);
+                }
+                if let Some((byte, bit)) = bits.unknown_incompat_bit() {
+                    return Err(ReadError::IncompatibleFlags { byte, bit });
+                }
+                self.flag_bits = Some(bits);
+                Ok(Applied::Nothing)
+            }
+            Message::Format(text) => {
+                let text = match std::str::from_utf8(text) {
+                    Ok(t) => t,
+                    Err(_) => return diag(invalid_utf8("format definition", text)),
+                };
+                match Format::parse(text) {
+                    Err(error) => diag(DiagnosticKind::InvalidFormat { text: text.to_owned(), error }),
+                    Ok(format) => match self.schema.insert(format) {
+                        Ok(_) => Ok(Applied::Nothing),
+                        Err(e) => diag(DiagnosticKind::Redefinition(e)),
+                    },
+                }
+            }
+            Message::Info(kv) => {
+                let (field, type_name, value) = match typed_value(kv) {
+                    Ok(x) => x,
+                    Err(kind) => return diag(kind),
+                };
+                match self.info.iter_mut().find(|i| i.key == field.name) {
+                    Some(existing) => {
+                        existing.type_name = type_name;
+                        existing.value = value;
+                    }
+                    None => self.info.push(Info { key: field.name, type_name, value }),
+                }
+                Ok(Applied::Nothing)
+            }
+            Message::MultiInfo { continued, entry } => {
+                let (field, type_name, value) = match typed_value(entry) {
+                    Ok(x) => x,
+                    Err(kind) => return diag(kind),
+                };
+                match self.multi_info.iter_mut().find(|m| m.key == field.name) {
+                    Some(m) => match m.values.last_mut() {
+                        Some(last) if continued => last.push(value),
+                        _ => m.values.push(vec![value]),
+                    },
+                    None => self.multi_info.push(MultiInfo {
+                        key: field.name,
+                        type_name,
+                        values: vec![vec![value]],
+                    }),
+                }
+                Ok(Applied::Nothing)
+            }
+            Message::Parameter(kv) => {
+                let (name, value) = match param_value(kv) {
+                    Ok(x) => x,
+                    Err(kind) => return diag(kind),
+                };
+                if self.in_data_section {
+                    return Ok(Applied::ParameterChange(ParameterChange {
+                        timestamp: self.last_timestamp,
+                        name,
+                        value,
+                    }));
+                }
+                match self.initial_parameters.iter_mut().find(|p| p.name == name) {
+                    Some(p) => p.value = value,
+                    None => self.initial_parameters.push(Parameter { name, value }),
+                }
+                Ok(Applied::Nothing)
+            }
+            Message::DefaultParameter { default_types, entry } => {
+                let (name, value) = match param_value(entry) {
+                    Ok(x) => x,
+                    Err(kind) => return diag(kind),
+                };
+                self.default_parameters.push(DefaultParameter { default_types, name, value });
+                Ok(Applied::Nothing)
+            }
+            Message::Subscribe { multi_id, msg_id, name } => {
+                self.in_data_section = true;
+                self.subscribe(offset, multi_id, msg_id, name)
+            }
+            Message::Unsubscribe { .. } => {
+                self.in_data_section = true;
+                Ok(Applied::Nothing)
+            }
+            Message::Data { msg_id, data } => {
+                self.in_data_section = true;
+                self.data(offset, msg_id, data)
+            }
+            Message::Logging { level, tag, timestamp, text } => {
+                self.in_data_section = true;
+                Ok(Applied::Logged(LoggedMessage {
+                    level_byte: level,
+                    tag,
+                    timestamp,
+                    text: String::from_utf8_lossy(text).into_owned(),
+                }))
+            }
+            Message::Sync => {
+                self.sync_count += 1;
+                Ok(Applied::Sync)
+            }
+            Message::Dropout { duration_ms } => {
+                self.in_data_section = true;
+                self.dropouts_us += u64::from(duration_ms) * 1000;
+                Ok(Applied::Dropout(Dropout { timestamp: self.last_timestamp, duration_ms, offset }))
+            }
+            Message::Unknown { ty, payload } => diag(DiagnosticKind::UnknownMessageType {
+                ty,
+                size: payload.len() as u16,
+            }),
+        }
+    }
+
+    fn subscribe(&mut self, offset: u64, multi_id: u8, msg_id: u16, name: &[u8]) -> Result<Applied, ReadError> {
+        let diag = |kind| Ok(Applied::Diagnostic(Diagnostic { offset, kind }));
+        let name = match std::str::from_utf8(name) {
+            Ok(n) => n.to_owned(),
+            Err(_) => return diag(invalid_utf8("subscription name", name)),
+        };
+        let mut sub = Subscription {
+            msg_id,
+            multi_id,
+            name,
+            offset,
+            format: None,
+            sizes: None,
+            timestamp: None,
+            plan: None,
+            clock: Clock::default(),
+        };
+        let mut problem = None;
+        match self.schema.id(&sub.name) {
+            None => {
+                problem = Some(DiagnosticKind::BadSubscription {
+                    topic: sub.name.clone(),
+                    msg_id,
+                    error: crate::schema::LayoutError::UnknownFormat(sub.name.clone()).into(),
+                });
+            }
+            Some(id) => match RowPlan::check(&mut self.schema, id) {
+                Err(error) => {
+                    problem = Some(DiagnosticKind::BadSubscription { topic: sub.name.clone(), msg_id, error });
+                }
+                Ok(layout) => {
+                    sub.format = Some(id);
+                    sub.sizes = Some((layout.payload_size, layout.size));
+                    sub.timestamp = layout.field("timestamp").and_then(|f| match f.kind {
+                        crate::schema::FieldKind::Primitive(p)
+                            if p.is_unsigned_integer() && f.array_len.is_none() =>
+                        {
+                            Some((f.offset, p))
+                        }
+                        _ => None,
+                    });
+                    if sub.timestamp.is_none() {
+                        problem = Some(DiagnosticKind::MissingTimestamp { topic: sub.name.clone() });
+                    }
+                }
+            },
+        }
+        if let Some(&previous) = self.by_msg_id.get(&msg_id) {
+            problem.get_or_insert(DiagnosticKind::DuplicateMsgId {
+                msg_id,
+                previous: self.subscriptions[previous].name.clone(),
+                topic: sub.name.clone(),
+            });
+        }
+        let sizes = sub.sizes;
+        self.by_msg_id.insert(msg_id, self.subscriptions.len());
+        self.subscriptions.push(sub);
+        if let Some(kind) = problem {
+            return diag(kind);
+        }
+        Ok(match sizes {
+            Some((min, max)) => Applied::Subscribed { msg_id, min, max },
+            None => Applied::Nothing,
+        })
+    }
+
+    fn data(&mut self, offset: u64, msg_id: u16, data: &[u8]) -> Result<Applied, ReadError> {
+        let Some(&index) = self.by_msg_id.get(&msg_id) else {
+            return Ok(Applied::Diagnostic(Diagnostic { offset, kind: DiagnosticKind::UnknownMsgId { msg_id } }));
+        };
+        let sub = &mut self.subscriptions[index];
+        let Some((min, max)) = sub.sizes else {
+            // The subscription was already reported as undecodable.
+            return Ok(Applied::Nothing);
+        };
+        if !(min..=max).contains(&data.len()) {
+            return Ok(Applied::Diagnostic(Diagnostic {
+                offset,
+                kind: DiagnosticKind::PayloadSize {
+                    topic: sub.name.clone(),
+                    multi_id: sub.multi_id,
+                    msg_id,
+                    len: data.len(),
+                    min,
+                    max,
+                },
+            }));
+        }
+        if sub.plan.is_none() {
+            // Built at the first row, so that plan memory is bounded by the data read.
+            if let Some(id) = sub.format {
+                sub.plan = RowPlan::new(&mut self.schema, id).ok();
+            }
+        }
+        let timestamp = match sub.timestamp {
+            None => 0,
+            Some((at, p)) => {
+                let raw = crate::value::Scalar::decode(p, &data[at..])
+                    .and_then(|s| s.as_i128())
+                    .unwrap_or(0) as u64;
+                sub.clock.unwrap(p, raw, self.dropouts_us)
+            }
+        };
+        if timestamp > self.last_timestamp {
+            self.last_timestamp = timestamp;
+        }
+        Ok(Applied::Row { sub: index, timestamp })
+    }
+}
+
+fn invalid_utf8(what: &'static str, bytes: &[u8]) -> DiagnosticKind {
+    DiagnosticKind::InvalidUtf8 { what, text: String::from_utf8_lossy(bytes).into_owned() }
+}
+
+/// Decodes the key and value of an `I`/`M`/`P`/`Q` message.
+fn typed_value(kv: KeyValue<'_>) -> Result<(Field, String, Value), DiagnosticKind> {
+    let key = std::str::from_utf8(kv.key).map_err(|_| invalid_utf8("info key", kv.key))?;
+    let invalid = |reason: String| DiagnosticKind::InvalidValue { key: key.to_owned(), reason };
+    let field = Field::parse(key).map_err(|e| invalid(e.to_string()))?;
+    let TypeRef::Primitive(p) = field.ty else {
+        return Err(invalid(format!("`{}` is not a basic type", field.ty)));
+    };
+    let type_name = match field.array_len {
+        Some(n) => format!("{p}[{n}]"),
+        None => p.to_string(),
+    };
+    let value = if p == Primitive::Char && field.array_len.is_some() {
+        // The text is the whole value, whatever length the key declares (as pyulog reads it).
+        Value::String(String::from_utf8_lossy(kv.value).into_owned())
+    } else {
+        let expected = field.count() * p.size();
+        if kv.value.len() != expected {
+            return Err(invalid(format!("{} value bytes, the type needs {expected}", kv.value.len())));
+        }
+        Value::decode_primitive(p, field.array_len.map(usize::from), kv.value, false)
+            .ok_or_else(|| invalid("undecodable".to_owned()))?
+    };
+    Ok((field, type_name, value))
+}
+
+fn param_value(kv: KeyValue<'_>) -> Result<(String, ParamValue), DiagnosticKind> {
+    let (field, type_name, value) = typed_value(kv)?;
+    let value = match value {
+        Value::Scalar(crate::value::Scalar::Int32(v)) => ParamValue::Int32(v),
+        Value::Scalar(crate::value::Scalar::Float(v)) => ParamValue::Float(v),
+        _ => {
+            return Err(DiagnosticKind::InvalidValue {
+                key: format!("{type_name} {}", field.name),
+                reason: "parameters are int32_t or float".to_owned(),
+            });
+        }
+    };
+    Ok((field.name, value))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clock_unwraps_small_timestamps() {
+        let mut c = Clock::default();
+        let seq: Vec<u64> = [65_000u64, 65_500, 200, 900, 100]
+            .into_iter()
+            .map(|raw| c.unwrap(Primitive::UInt16, raw, 0))
+            .collect();
+        assert_eq!(seq, [65_000, 65_500, 65_736, 66_436, 131_172]);
+        // uint8_t counts milliseconds.
+        let mut ms = Clock::default();
+        assert_eq!(ms.unwrap(Primitive::UInt8, 250, 0), 250_000);
+        assert_eq!(ms.unwrap(Primitive::UInt8, 5, 0), 261_000);
+        // A dropout longer than a whole period adds that period.
+        let mut d = Clock::default();
+        assert_eq!(d.unwrap(Primitive::UInt16, 1_000, 0), 1_000);
+        assert_eq!(d.unwrap(Primitive::UInt16, 2_000, 70_000), 2_000 + 65_536);
+        assert_eq!(Clock::default().unwrap(Primitive::UInt64, u64::MAX, 0), u64::MAX);
+    }
+
+    #[test]
+    fn log_levels() {
+        assert_eq!(LogLevel::from_byte(b'6'), Some(LogLevel::Info));
+        assert_eq!(LogLevel::from_byte(3), Some(LogLevel::Error));
+        assert_eq!(LogLevel::from_byte(b'9'), None);
+        assert_eq!(LogLevel::Emergency.name(), "EMERGENCY");
+    }
+}

@@ -1,0 +1,116 @@
+//! Reading ULog files: zero-copy over bytes or a memory map ([`Log`]), or streaming over any
+//! `io::Read` ([`StreamReader`]). Both share one framer (message boundaries and corruption
+//! recovery) and one interpreter ([`Metadata`]).
+
+mod framer;
+mod log;
+mod message;
+mod metadata;
+mod stream;
+
+pub use log::{DataRows, Log, Rows};
+pub use message::{
+    FLAG_BITS_LEN, FileHeader, FlagBits, HEADER_LEN, KNOWN_VERSION, KeyValue, MAGIC,
+    MESSAGE_HEADER_LEN, MalformedMessage, Message, MessageType, SYNC_MAGIC,
+};
+pub use metadata::{
+    DefaultParameter, Dropout, Info, LogLevel, LoggedMessage, Metadata, MultiInfo, ParamValue,
+    Parameter, ParameterChange, Subscription,
+};
+pub use stream::{Event, StreamReader};
+
+use crate::error::{Diagnostic, DiagnosticKind, ReadError};
+use crate::schema::Schema;
+use crate::value::{RowPlan, Scalar, Value};
+use framer::{Frame, Framer};
+use metadata::Applied;
+
+/// One data row, borrowed from the file.
+#[derive(Debug, Clone, Copy)]
+pub struct Row<'a> {
+    /// Microseconds: the row's `timestamp` field, unwrapped for version-0 small types.
+    pub timestamp: u64,
+    /// File offset of the `D` message.
+    pub offset: u64,
+    /// The packed row (may lack the trailing padding).
+    pub data: &'a [u8],
+    /// The subscription it belongs to.
+    pub subscription: &'a Subscription,
+    schema: &'a Schema,
+}
+
+impl<'a> Row<'a> {
+    /// The row as a value tree (padding hidden, `char` arrays as text).
+    pub fn value(&self) -> Option<Value> {
+        self.plan()?.value(self.schema, self.data)
+    }
+
+    /// Calls `f` with every leaf in column order, without allocating; `false` if the row
+    /// cannot be decoded.
+    #[inline]
+    pub fn for_each_leaf(&self, f: impl FnMut(Scalar)) -> bool {
+        match self.plan() {
+            Some(plan) => plan.for_each_leaf(self.data, f),
+            None => false,
+        }
+    }
+
+    /// The dynamic decoding plan of this row's subscription.
+    pub fn plan(&self) -> Option<&'a RowPlan> {
+        self.subscription.plan.as_ref()
+    }
+
+    /// The schema the row's format belongs to.
+    pub fn schema(&self) -> &'a Schema {
+        self.schema
+    }
+}
+
+/// What one step of walking a file produced.
+enum Step<'w> {
+    Applied { offset: u64, applied: Applied, payload: &'w [u8] },
+    NeedMore { keep_from: u64 },
+    End,
+}
+
+/// The framer and the interpreter, stepped together over a window of file bytes.
+struct Walker {
+    framer: Framer,
+    meta: Metadata,
+}
+
+impl Walker {
+    fn new(header: FileHeader) -> Walker {
+        Walker { framer: Framer::new(), meta: Metadata::new(header) }
+    }
+
+    fn step<'w>(&mut self, w: &'w [u8], base: u64, eof: bool) -> Result<Step<'w>, ReadError> {
+        let diag = |offset, kind| Step::Applied {
+            offset,
+            applied: Applied::Diagnostic(Diagnostic { offset, kind }),
+            payload: &[],
+        };
+        Ok(match self.framer.next(w, base, eof) {
+            Frame::Message { offset, ty, size } => {
+                let start = (offset - base) as usize + MESSAGE_HEADER_LEN;
+                let payload = &w[start..start + usize::from(size)];
+                let applied = match Message::parse(ty, payload) {
+                    Ok(msg) => self.meta.apply(offset, msg)?,
+                    Err(e) => Applied::Diagnostic(Diagnostic { offset, kind: DiagnosticKind::Malformed(e) }),
+                };
+                if let Applied::Subscribed { msg_id, min, max } = applied {
+                    self.framer.subscribe(msg_id, min, max);
+                }
+                Step::Applied { offset, applied, payload }
+            }
+            Frame::Skipped { from, to } => diag(from, DiagnosticKind::Skipped { to, len: to - from }),
+            Frame::Overlap { prev, next } => diag(prev, DiagnosticKind::Overlap { next }),
+            Frame::Truncated { offset, declared, available } => {
+                diag(offset, DiagnosticKind::Truncated { declared, available })
+            }
+            Frame::BadAppendedOffset { offset } => diag(offset, DiagnosticKind::BadAppendedOffset(offset)),
+            Frame::NeedMore { keep_from } => Step::NeedMore { keep_from },
+            Frame::End => Step::End,
+        })
+    }
+}

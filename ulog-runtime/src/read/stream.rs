@@ -1,0 +1,198 @@
+//! Streaming over any `io::Read`: memory stays bounded by a few messages plus the definitions,
+//! whatever the file size.
+
+use std::io::Read;
+
+use super::message::{FileHeader, HEADER_LEN, MessageType};
+use super::metadata::Applied;
+use super::{
+    Diagnostic, Dropout, LoggedMessage, Metadata, ParameterChange, ReadError, Row, Step, Subscription,
+    Walker,
+};
+
+/// Bytes read from the input at a time.
+const CHUNK: usize = 64 * 1024;
+
+/// One thing read from a stream.
+#[derive(Debug, Clone)]
+pub enum Event<'a> {
+    /// A definition was read (`B`, `F`, `I`, `M`, `Q`, `R`, or `P` before the data section);
+    /// [`StreamReader::metadata`] has it.
+    Definition {
+        /// File offset of the message.
+        offset: u64,
+        /// Its type.
+        ty: MessageType,
+    },
+    /// A new subscription.
+    Subscription(&'a Subscription),
+    /// A data row.
+    Row(Row<'a>),
+    /// A logged string.
+    Logged(LoggedMessage),
+    /// A parameter changed.
+    ParameterChange(ParameterChange),
+    /// Logging lost data.
+    Dropout(Dropout),
+    /// A sync message.
+    Sync {
+        /// Its file offset.
+        offset: u64,
+    },
+    /// Something wrong or unusual; reading goes on.
+    Diagnostic(Diagnostic),
+}
+
+/// Reads a ULog file from any `io::Read`, one event at a time.
+///
+/// ```no_run
+/// # fn main() -> Result<(), ulog_runtime::ReadError> {
+/// use ulog_runtime::{Event, StreamReader};
+/// let file = std::io::BufReader::new(std::fs::File::open("flight.ulg")?);
+/// let mut reader = StreamReader::new(file)?;
+/// let mut rows = 0;
+/// while let Some(event) = reader.next_event()? {
+///     match event {
+///         Event::Row(_) => rows += 1,
+///         Event::Diagnostic(d) => eprintln!("{d}"),
+///         _ => {}
+///     }
+/// }
+/// println!("{rows} rows");
+/// # Ok(()) }
+/// ```
+pub struct StreamReader<R> {
+    input: R,
+    buf: Vec<u8>,
+    base: u64,
+    eof: bool,
+    walker: Walker,
+    pending: Option<Diagnostic>,
+}
+
+impl<R: Read> StreamReader<R> {
+    /// Reads the file header and prepares to read messages.
+    pub fn new(mut input: R) -> Result<StreamReader<R>, ReadError> {
+        let mut header = [0u8; HEADER_LEN];
+        let mut got = 0;
+        while got < HEADER_LEN {
+            match input.read(&mut header[got..]) {
+                Ok(0) => break,
+                Ok(n) => got += n,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e.into()),
+            }
+        }
+        let header = FileHeader::parse(&header[..got])?;
+        let walker = Walker::new(header);
+        let pending = walker.meta.header_diagnostic();
+        Ok(StreamReader {
+            input,
+            buf: Vec::with_capacity(4 * CHUNK),
+            base: HEADER_LEN as u64,
+            eof: false,
+            walker,
+            pending,
+        })
+    }
+
+    /// Everything read so far but the data rows.
+    pub fn metadata(&self) -> &Metadata {
+        &self.walker.meta
+    }
+
+    /// The next event, or `None` at the end of the file.
+    #[allow(clippy::should_implement_trait)]
+    pub fn next_event(&mut self) -> Result<Option<Event<'_>>, ReadError> {
+        if let Some(d) = self.pending.take() {
+            return Ok(Some(Event::Diagnostic(d)));
+        }
+        loop {
+            let step = self.walker.step(&self.buf, self.base, self.eof)?;
+            match step {
+                Step::End => return Ok(None),
+                Step::NeedMore { keep_from } => {
+                    let keep_from = keep_from.max(self.base);
+                    self.fill(keep_from)?;
+                }
+                Step::Applied { offset, applied, payload } => {
+                    let event = match applied {
+                        Applied::Nothing => {
+                            let ty = self.buf[(offset - self.base) as usize + 2];
+                            match MessageType::from_byte(ty) {
+                                Some(ty) => Event::Definition { offset, ty },
+                                None => continue,
+                            }
+                        }
+                        Applied::Subscribed { .. } => {
+                            let sub = self.walker.meta.subscriptions.last().expect("just added");
+                            Event::Subscription(sub)
+                        }
+                        Applied::Row { sub, timestamp } => {
+                            let start = (offset - self.base) as usize + super::MESSAGE_HEADER_LEN + 2;
+                            let len = payload.len() - 2;
+                            Event::Row(Row {
+                                timestamp,
+                                offset,
+                                data: &self.buf[start..start + len],
+                                subscription: &self.walker.meta.subscriptions[sub],
+                                schema: &self.walker.meta.schema,
+                            })
+                        }
+                        Applied::Logged(m) => Event::Logged(m),
+                        Applied::Dropout(d) => Event::Dropout(d),
+                        Applied::ParameterChange(c) => Event::ParameterChange(c),
+                        Applied::Sync => Event::Sync { offset },
+                        Applied::Diagnostic(d) => Event::Diagnostic(d),
+                    };
+                    return Ok(Some(event));
+                }
+            }
+        }
+    }
+
+    /// Drops the bytes before `keep_from` and reads at least one more chunk (or hits the end).
+    fn fill(&mut self, keep_from: u64) -> Result<(), ReadError> {
+        let end = self.base + self.buf.len() as u64;
+        if keep_from >= end {
+            // Skip input up to `keep_from` (a jump to an appended segment).
+            let mut to_skip = keep_from - end;
+            self.buf.clear();
+            self.base = end;
+            while to_skip > 0 {
+                let n = std::io::copy(&mut (&mut self.input).take(to_skip), &mut std::io::sink())?;
+                if n == 0 {
+                    break;
+                }
+                to_skip -= n;
+                self.base += n;
+            }
+            if to_skip > 0 {
+                self.eof = true;
+                return Ok(());
+            }
+        } else {
+            self.buf.drain(..(keep_from - self.base) as usize);
+            self.base = keep_from;
+        }
+        let old = self.buf.len();
+        self.buf.resize(old + CHUNK, 0);
+        let mut got = 0;
+        while got < CHUNK {
+            match self.input.read(&mut self.buf[old + got..]) {
+                Ok(0) => {
+                    self.eof = true;
+                    break;
+                }
+                Ok(n) => got += n,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => {
+                    self.buf.truncate(old + got);
+                    return Err(e.into());
+                }
+            }
+        }
+        self.buf.truncate(old + got);
+        Ok(())
+    }
+}
