@@ -59,7 +59,10 @@ fn run(path: &str, topics: bool, stream: bool) -> Result<(), ulog_runtime::ReadE
     let mut add = |row: &Row<'_>| {
         if topics {
             let s = row.subscription;
-            per_topic.entry((s.name.clone(), s.multi_id, s.msg_id)).or_default().add(row);
+            per_topic
+                .entry((s.name.clone(), s.multi_id, s.msg_id))
+                .or_default()
+                .add(row);
         } else {
             all.add(row);
         }
@@ -83,7 +86,10 @@ fn run(path: &str, topics: bool, stream: bool) -> Result<(), ulog_runtime::ReadE
             println!("{topic} {multi_id} {} {:.6e}", t.rows, t.sum);
         }
     } else {
-        println!("msgs={} leaves={} sum={:.6e}", all.rows, all.leaves, all.sum);
+        println!(
+            "msgs={} leaves={} sum={:.6e}",
+            all.rows, all.leaves, all.sum
+        );
     }
     Ok(())
 }

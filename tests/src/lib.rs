@@ -1,1 +1,73 @@
-//! Integration, conformance and compile-fail suites for the ULog workspace.
+//! Shared support for the integration suites: finding the ULog corpus and its pyulog oracles.
+//!
+//! The corpus is the folder named by `ULOG_CORPUS` (default `../shared/testdata/ulog`
+//! relative to the workspace root), searched recursively for `.ulg` files. Under CI
+//! (`CI=true`) a missing corpus fails the tests instead of skipping them.
+
+use std::path::{Path, PathBuf};
+
+/// The corpus folder.
+pub fn corpus_dir() -> PathBuf {
+    match std::env::var_os("ULOG_CORPUS") {
+        Some(dir) => PathBuf::from(dir),
+        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/testdata/ulog"),
+    }
+}
+
+/// Whether the tests run under CI, where nothing may be skipped.
+pub fn under_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| v == "true" || v == "1")
+}
+
+/// Every `.ulg` file of the corpus, sorted. Outside CI, an absent corpus yields an empty list
+/// (and a note on stderr); under CI it panics.
+pub fn corpus_files() -> Vec<PathBuf> {
+    let dir = corpus_dir();
+    let mut files = Vec::new();
+    collect(&dir, &mut files);
+    files.sort();
+    if files.is_empty() {
+        let msg = format!("no .ulg files under {} (set ULOG_CORPUS)", dir.display());
+        assert!(!under_ci(), "{msg}");
+        eprintln!("note: {msg}; corpus tests have nothing to check");
+    }
+    files
+}
+
+fn collect(dir: &Path, out: &mut Vec<PathBuf>) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let path = entry.path();
+        if path.is_dir() {
+            collect(&path, out);
+        } else if path.extension().is_some_and(|e| e == "ulg") {
+            out.push(path);
+        }
+    }
+}
+
+/// The pyulog oracle beside a corpus file (`FILE.ulg.oracle.json`), if there is one.
+pub fn oracle(path: &Path) -> Option<serde_json::Value> {
+    let mut name = path.as_os_str().to_owned();
+    name.push(".oracle.json");
+    let text = std::fs::read_to_string(PathBuf::from(name)).ok()?;
+    Some(serde_json::from_str(&text).expect("oracle files are valid JSON"))
+}
+
+/// A short name for messages: the file name and its parent folder.
+pub fn short_name(path: &Path) -> String {
+    let parent = path
+        .parent()
+        .and_then(Path::file_name)
+        .map(|p| p.to_string_lossy().into_owned());
+    let file = path
+        .file_name()
+        .map(|p| p.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    match parent {
+        Some(p) => format!("{p}/{file}"),
+        None => file,
+    }
+}

@@ -171,7 +171,9 @@ pub enum DiagnosticKind {
         msg_id: u16,
     },
     /// Data whose length does not fit its format; the row is skipped.
-    #[error("`{topic}` (multi_id {multi_id}, msg_id {msg_id}): {len}-byte row, the format needs {min}..={max}; row skipped")]
+    #[error(
+        "`{topic}` (multi_id {multi_id}, msg_id {msg_id}): {len}-byte row, the format needs {min}..={max}; row skipped"
+    )]
     PayloadSize {
         /// The topic.
         topic: String,

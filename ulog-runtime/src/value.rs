@@ -181,7 +181,12 @@ impl Value {
     /// Decodes `count` elements of primitive `p` (`None`: a scalar) from `b`, as an info value
     /// or a row field: `char` arrays become text, other arrays become [`Value::Array`].
     /// `cut_at_nul` cuts text at the first NUL (data rows) or keeps every byte (info values).
-    pub fn decode_primitive(p: Primitive, count: Option<usize>, b: &[u8], cut_at_nul: bool) -> Option<Value> {
+    pub fn decode_primitive(
+        p: Primitive,
+        count: Option<usize>,
+        b: &[u8],
+        cut_at_nul: bool,
+    ) -> Option<Value> {
         match count {
             None => Scalar::decode(p, b).map(Value::Scalar),
             Some(n) if p == Primitive::Char => {
@@ -343,7 +348,11 @@ impl RowPlan {
                     return;
                 }
             }
-            runs.push(LeafRun { offset: offset as u32, count: count as u32, primitive });
+            runs.push(LeafRun {
+                offset: offset as u32,
+                count: count as u32,
+                primitive,
+            });
         });
         Ok(RowPlan { root, runs, leaves })
     }
@@ -409,8 +418,12 @@ impl RowPlan {
                 Primitive::UInt64 => each!(u64, UInt64),
                 Primitive::Float => each!(f32, Float),
                 Primitive::Double => each!(f64, Double),
-                Primitive::Bool => row[start..start + n].iter().for_each(|&b| f(Scalar::Bool(b != 0))),
-                Primitive::Char => row[start..start + n].iter().for_each(|&b| f(Scalar::Char(b))),
+                Primitive::Bool => row[start..start + n]
+                    .iter()
+                    .for_each(|&b| f(Scalar::Bool(b != 0))),
+                Primitive::Char => row[start..start + n]
+                    .iter()
+                    .for_each(|&b| f(Scalar::Char(b))),
             }
         }
         true
@@ -434,8 +447,15 @@ impl RowPlan {
 }
 
 /// Visits every non-padding leaf field (offset, type, element count), depth first.
-fn walk_leaves(schema: &Schema, id: FormatId, base: usize, f: &mut impl FnMut(usize, Primitive, usize)) {
-    let Some(layout) = schema.resolved(id) else { return };
+fn walk_leaves(
+    schema: &Schema,
+    id: FormatId,
+    base: usize,
+    f: &mut impl FnMut(usize, Primitive, usize),
+) {
+    let Some(layout) = schema.resolved(id) else {
+        return;
+    };
     for field in layout.fields.iter().filter(|f| !f.padding) {
         match field.kind {
             FieldKind::Primitive(p) => f(base + field.offset, p, field.count()),
@@ -449,7 +469,9 @@ fn walk_leaves(schema: &Schema, id: FormatId, base: usize, f: &mut impl FnMut(us
 }
 
 fn flatten(schema: &Schema, id: FormatId, prefix: &str, base: usize, out: &mut Vec<Column>) {
-    let Some(layout) = schema.resolved(id) else { return };
+    let Some(layout) = schema.resolved(id) else {
+        return;
+    };
     for field in layout.fields.iter().filter(|f| !f.padding) {
         let offset = base + field.offset;
         match (field.kind, field.array_len) {
@@ -468,7 +490,13 @@ fn flatten(schema: &Schema, id: FormatId, prefix: &str, base: usize, out: &mut V
                 }
             }
             (FieldKind::Nested(dep), None) => {
-                flatten(schema, dep, &format!("{prefix}{}.", field.name), offset, out);
+                flatten(
+                    schema,
+                    dep,
+                    &format!("{prefix}{}.", field.name),
+                    offset,
+                    out,
+                );
             }
             (FieldKind::Nested(dep), Some(n)) => {
                 for i in 0..usize::from(n) {
@@ -494,7 +522,9 @@ fn struct_value(schema: &Schema, layout: &Layout, b: &[u8]) -> Option<Value> {
                     None => struct_value(schema, dep_layout, at)?,
                     Some(n) => Value::Array(
                         (0..usize::from(n))
-                            .map(|i| struct_value(schema, dep_layout, at.get(i * field.elem_size..)?))
+                            .map(|i| {
+                                struct_value(schema, dep_layout, at.get(i * field.elem_size..)?)
+                            })
                             .collect::<Option<_>>()?,
                     ),
                 }
@@ -531,7 +561,19 @@ mod tests {
         let names: Vec<String> = p.columns(&s).into_iter().map(|c| c.name).collect();
         assert_eq!(
             names,
-            ["timestamp", "q[0]", "q[1]", "e[0].a", "e[0].b", "e[1].a", "e[1].b", "name[0]", "name[1]", "name[2]", "name[3]"]
+            [
+                "timestamp",
+                "q[0]",
+                "q[1]",
+                "e[0].a",
+                "e[0].b",
+                "e[1].a",
+                "e[1].b",
+                "name[0]",
+                "name[1]",
+                "name[2]",
+                "name[3]"
+            ]
         );
         assert_eq!(p.leaf_count(), 11);
         // timestamp | q[0] q[1] | a | b | a | b | name: the two floats of q merge into one run.
@@ -549,20 +591,37 @@ mod tests {
         row.extend_from_slice(b"hi\0x");
         let mut leaves = Vec::new();
         assert!(p.for_each_leaf(&row, |v| leaves.push(v.as_f64())));
-        assert_eq!(leaves, [7.0, 1.5, -2.0, -3.0, 0.25, 4.0, 8.0, 104.0, 105.0, 0.0, 120.0]);
+        assert_eq!(
+            leaves,
+            [
+                7.0, 1.5, -2.0, -3.0, 0.25, 4.0, 8.0, 104.0, 105.0, 0.0, 120.0
+            ]
+        );
 
         let v = p.value(&s, &row).unwrap();
-        assert_eq!(v.field("timestamp").unwrap().as_scalar(), Some(Scalar::UInt64(7)));
+        assert_eq!(
+            v.field("timestamp").unwrap().as_scalar(),
+            Some(Scalar::UInt64(7))
+        );
         assert_eq!(v.field("name").unwrap().as_str(), Some("hi"));
-        assert_eq!(v.to_string(), "{timestamp: 7, q: [1.5, -2], e: [{a: -3, b: 0.25}, {a: 4, b: 8}], name: \"hi\"}");
+        assert_eq!(
+            v.to_string(),
+            "{timestamp: 7, q: [1.5, -2], e: [{a: -3, b: 0.25}, {a: 4, b: 8}], name: \"hi\"}"
+        );
         assert!(p.value(&s, &row[..row.len() - 1]).is_none());
         assert!(!p.for_each_leaf(&row[..10], |_| panic!("nothing is visited")));
     }
 
     #[test]
     fn scalars_follow_pyulog_conventions() {
-        assert_eq!(Scalar::decode(Primitive::Char, &[0xff]).unwrap().as_f64(), -1.0);
-        assert_eq!(Scalar::decode(Primitive::Bool, &[0x41]).unwrap().as_f64(), 1.0);
+        assert_eq!(
+            Scalar::decode(Primitive::Char, &[0xff]).unwrap().as_f64(),
+            -1.0
+        );
+        assert_eq!(
+            Scalar::decode(Primitive::Bool, &[0x41]).unwrap().as_f64(),
+            1.0
+        );
         assert_eq!(Scalar::decode(Primitive::UInt16, &[1]), None);
         assert_eq!(Scalar::UInt64(u64::MAX).as_i128(), Some(u64::MAX as i128));
     }
@@ -571,11 +630,15 @@ mod tests {
     fn too_deep_nesting_is_refused() {
         let mut s = Schema::new();
         for i in 0..70 {
-            s.insert(format!("t{i}:t{} n;", i + 1).parse().unwrap()).unwrap();
+            s.insert(format!("t{i}:t{} n;", i + 1).parse().unwrap())
+                .unwrap();
         }
         s.insert("t70:uint8_t v;".parse().unwrap()).unwrap();
         let id = s.id("t0").unwrap();
-        assert!(matches!(RowPlan::new(&mut s, id), Err(PlanError::TooDeep { depth: 71, .. })));
+        assert!(matches!(
+            RowPlan::new(&mut s, id),
+            Err(PlanError::TooDeep { depth: 71, .. })
+        ));
         let ok = s.id("t10").unwrap();
         assert_eq!(RowPlan::new(&mut s, ok).unwrap().leaf_count(), 1);
     }
@@ -586,8 +649,14 @@ mod tests {
         let v = Value::Struct(vec![
             ("a".into(), Value::Scalar(Scalar::Float(0.5))),
             ("s".into(), Value::String("x".into())),
-            ("l".into(), Value::Array(vec![Value::Scalar(Scalar::Bool(true))])),
+            (
+                "l".into(),
+                Value::Array(vec![Value::Scalar(Scalar::Bool(true))]),
+            ),
         ]);
-        assert_eq!(serde_json::to_string(&v).unwrap(), r#"{"a":0.5,"s":"x","l":[true]}"#);
+        assert_eq!(
+            serde_json::to_string(&v).unwrap(),
+            r#"{"a":0.5,"s":"x","l":[true]}"#
+        );
     }
 }

@@ -13,9 +13,7 @@
 //! sync magic), and reports the bytes it skipped. Starting the scan just after the last
 //! accepted message recovers the message that follows a damaged size field.
 
-use super::message::{
-    HEADER_LEN, MESSAGE_HEADER_LEN, MessageType, SYNC_MAGIC, u16_at,
-};
+use super::message::{HEADER_LEN, MESSAGE_HEADER_LEN, MessageType, SYNC_MAGIC, u16_at};
 
 /// What the framer found next.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -27,7 +25,11 @@ pub(crate) enum Frame {
     /// The message at `prev` declared a size that runs into the message found at `next`.
     Overlap { prev: u64, next: u64 },
     /// A message at `offset` runs past the end of its segment or the file.
-    Truncated { offset: u64, declared: Option<u16>, available: u64 },
+    Truncated {
+        offset: u64,
+        declared: Option<u16>,
+        available: u64,
+    },
     /// An appended-data offset of the flag bits that cannot be right.
     BadAppendedOffset { offset: u64 },
     /// More bytes are needed; bytes before `keep_from` will not be needed again.
@@ -59,7 +61,10 @@ struct SizeRange {
     max: u16,
 }
 
-const UNSUBSCRIBED: SizeRange = SizeRange { min: u16::MAX, max: 0 };
+const UNSUBSCRIBED: SizeRange = SizeRange {
+    min: u16::MAX,
+    max: 0,
+};
 
 pub(crate) struct Framer {
     pos: u64,
@@ -103,7 +108,11 @@ impl Framer {
         }
         let avail = base + w.len() as u64;
         loop {
-            let end = if eof { self.segment_end.min(avail) } else { self.segment_end };
+            let end = if eof {
+                self.segment_end.min(avail)
+            } else {
+                self.segment_end
+            };
             if let Some(rs) = self.resync {
                 return self.scan(w, base, avail, end, rs);
             }
@@ -125,7 +134,11 @@ impl Framer {
             }
             if p + MESSAGE_HEADER_LEN as u64 > end {
                 self.pos = end;
-                return Frame::Truncated { offset: p, declared: None, available: end - p };
+                return Frame::Truncated {
+                    offset: p,
+                    declared: None,
+                    available: end - p,
+                };
             }
             let Some(h) = window(w, base, p, MESSAGE_HEADER_LEN) else {
                 return self.need_more(p);
@@ -160,7 +173,11 @@ impl Framer {
             if ty == b'B' && p == HEADER_LEN as u64 {
                 self.read_flag_bits(&msg[MESSAGE_HEADER_LEN..], msg_end);
             }
-            return Frame::Message { offset: p, ty, size };
+            return Frame::Message {
+                offset: p,
+                ty,
+                size,
+            };
         }
     }
 
@@ -174,12 +191,23 @@ impl Framer {
 
     fn fail(&mut self, bad: u64, bad_size: Option<u16>) {
         let scan = self.prev.map_or(bad + 1, |prev| prev + 1).max(self.floor);
-        self.resync = Some(Resync { bad, bad_size, scan });
+        self.resync = Some(Resync {
+            bad,
+            bad_size,
+            scan,
+        });
     }
 
     /// How plausible the header at `msg_end` is, judged from its 3 bytes alone; `Strong`
     /// stands for "the segment or file ends exactly here". `None`: bytes are missing.
-    fn successor(&self, w: &[u8], base: u64, avail: u64, end: u64, at: u64) -> Option<Plausibility> {
+    fn successor(
+        &self,
+        w: &[u8],
+        base: u64,
+        avail: u64,
+        end: u64,
+        at: u64,
+    ) -> Option<Plausibility> {
         if at == end {
             return Some(Plausibility::Strong);
         }
@@ -195,7 +223,11 @@ impl Framer {
 
     fn plausibility(&self, offset: u64, ty: u8, p: &[u8]) -> Plausibility {
         let Some(kind) = MessageType::from_byte(ty) else {
-            return if p.is_empty() { Plausibility::Invalid } else { Plausibility::Unknown };
+            return if p.is_empty() {
+                Plausibility::Invalid
+            } else {
+                Plausibility::Unknown
+            };
         };
         if p.len() < kind.min_size() {
             return Plausibility::Invalid;
@@ -218,7 +250,11 @@ impl Framer {
                 matches!(p[0], b'0'..=b'7' | 0..=7)
             }
         };
-        if strong { Plausibility::Strong } else { Plausibility::Weak }
+        if strong {
+            Plausibility::Strong
+        } else {
+            Plausibility::Weak
+        }
     }
 
     /// Learns the appended-data segments from the flag bits at offset 16.
@@ -261,7 +297,10 @@ impl Framer {
                             available: end.saturating_sub(rs.bad + MESSAGE_HEADER_LEN as u64),
                         }
                     }
-                    _ => Frame::Skipped { from: rs.bad, to: end },
+                    _ => Frame::Skipped {
+                        from: rs.bad,
+                        to: end,
+                    },
                 };
             }
             let Some(h) = window(w, base, q, MESSAGE_HEADER_LEN) else {
@@ -283,15 +322,19 @@ impl Framer {
                     _ => {}
                 }
             }
-            if header_plausibility(h) != Plausibility::Invalid && MessageType::from_byte(h[2]).is_some() {
+            if header_plausibility(h) != Plausibility::Invalid
+                && MessageType::from_byte(h[2]).is_some()
+            {
                 let size = u16_at(h, 0);
                 let cand_end = q + MESSAGE_HEADER_LEN as u64 + u64::from(size);
                 if cand_end <= end {
-                    let Some(msg) = window(w, base, q, MESSAGE_HEADER_LEN + usize::from(size)) else {
+                    let Some(msg) = window(w, base, q, MESSAGE_HEADER_LEN + usize::from(size))
+                    else {
                         self.resync = Some(Resync { scan: q, ..rs });
                         return Frame::NeedMore { keep_from: q };
                     };
-                    if self.plausibility(q, h[2], &msg[MESSAGE_HEADER_LEN..]) == Plausibility::Strong
+                    if self.plausibility(q, h[2], &msg[MESSAGE_HEADER_LEN..])
+                        == Plausibility::Strong
                     {
                         match self.successor(w, base, avail, end, cand_end) {
                             None => {
@@ -315,9 +358,15 @@ impl Framer {
         self.pos = at;
         self.floor = at + 1;
         if at > rs.bad {
-            Frame::Skipped { from: rs.bad, to: at }
+            Frame::Skipped {
+                from: rs.bad,
+                to: at,
+            }
         } else {
-            Frame::Overlap { prev: self.prev.unwrap_or(rs.bad), next: at }
+            Frame::Overlap {
+                prev: self.prev.unwrap_or(rs.bad),
+                next: at,
+            }
         }
     }
 }
@@ -349,7 +398,9 @@ fn plausible_key(p: &[u8]) -> bool {
     let key_len = usize::from(p[0]);
     key_len >= 3
         && 1 + key_len <= p.len()
-        && p[1..=key_len].iter().all(|&c| c.is_ascii_graphic() || c == b' ')
+        && p[1..=key_len]
+            .iter()
+            .all(|&c| c.is_ascii_graphic() || c == b' ')
         && p[1..=key_len].contains(&b' ')
 }
 

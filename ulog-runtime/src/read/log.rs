@@ -5,8 +5,8 @@ use std::path::Path;
 
 use super::metadata::Applied;
 use super::{
-    Diagnostic, Dropout, FileHeader, FlagBits, LoggedMessage, Metadata, ParameterChange, ReadError,
-    Row, Step, Subscription, Walker, MESSAGE_HEADER_LEN,
+    Diagnostic, Dropout, FileHeader, FlagBits, LoggedMessage, MESSAGE_HEADER_LEN, Metadata,
+    ParameterChange, ReadError, Row, Step, Subscription, Walker,
 };
 use crate::schema::Primitive;
 
@@ -128,17 +128,25 @@ impl<'a> Log<'a> {
         };
         loop {
             match walker.step(data, 0, true)? {
-                Step::Applied { offset, applied, .. } => match applied {
+                Step::Applied {
+                    offset, applied, ..
+                } => match applied {
                     Applied::Nothing => {}
                     Applied::Subscribed { .. } => {}
                     Applied::Row { sub, timestamp } => {
                         if log.rows.len() <= sub {
-                            log.rows.resize_with(walker.meta.subscriptions.len(), RowIndex::default);
+                            log.rows
+                                .resize_with(walker.meta.subscriptions.len(), RowIndex::default);
                         }
                         let index = &mut log.rows[sub];
                         index.offsets.push(offset);
-                        if walker.meta.subscriptions[sub].timestamp_type() != Some(Primitive::UInt64) {
-                            index.timestamps.get_or_insert_with(Vec::new).push(timestamp);
+                        if walker.meta.subscriptions[sub].timestamp_type()
+                            != Some(Primitive::UInt64)
+                        {
+                            index
+                                .timestamps
+                                .get_or_insert_with(Vec::new)
+                                .push(timestamp);
                         }
                         log.order.push(sub as u32);
                     }
@@ -151,7 +159,8 @@ impl<'a> Log<'a> {
                 Step::NeedMore { .. } | Step::End => break,
             }
         }
-        log.rows.resize_with(walker.meta.subscriptions.len(), RowIndex::default);
+        log.rows
+            .resize_with(walker.meta.subscriptions.len(), RowIndex::default);
         log.meta = walker.meta;
         log.bytes = bytes;
         Ok(log)
@@ -184,7 +193,11 @@ impl<'a> Log<'a> {
 
     /// The last subscription to this topic instance.
     pub fn subscription(&self, name: &str, multi_id: u8) -> Option<&Subscription> {
-        self.meta.subscriptions.iter().rev().find(|s| s.name == name && s.multi_id == multi_id)
+        self.meta
+            .subscriptions
+            .iter()
+            .rev()
+            .find(|s| s.name == name && s.multi_id == multi_id)
     }
 
     /// The rows of one subscription, in file order.
@@ -193,12 +206,21 @@ impl<'a> Log<'a> {
     /// If `sub` does not come from this log.
     pub fn rows<'s>(&'s self, sub: &'s Subscription) -> Rows<'s> {
         let index = self.sub_index(sub);
-        Rows { log: self, sub: index, next: 0, end: self.rows[index].offsets.len() }
+        Rows {
+            log: self,
+            sub: index,
+            next: 0,
+            end: self.rows[index].offsets.len(),
+        }
     }
 
     /// Every data row of every subscription, in file order.
     pub fn data(&self) -> DataRows<'_> {
-        DataRows { log: self, next: 0, cursors: vec![0; self.rows.len()] }
+        DataRows {
+            log: self,
+            next: 0,
+            cursors: vec![0; self.rows.len()],
+        }
     }
 
     /// Total number of data rows read.
@@ -236,8 +258,14 @@ impl<'a> Log<'a> {
     pub fn corrupt_ranges(&self) -> impl Iterator<Item = std::ops::Range<u64>> + '_ {
         self.diagnostics.iter().filter_map(|d| match d.kind {
             crate::DiagnosticKind::Skipped { to, .. } => Some(d.offset..to),
-            crate::DiagnosticKind::Truncated { declared, available } => Some(
-                d.offset..d.offset + MESSAGE_HEADER_LEN as u64 * u64::from(declared.is_some()) + available,
+            crate::DiagnosticKind::Truncated {
+                declared,
+                available,
+            } => Some(
+                d.offset
+                    ..d.offset
+                        + MESSAGE_HEADER_LEN as u64 * u64::from(declared.is_some())
+                        + available,
             ),
             _ => None,
         })
@@ -268,7 +296,13 @@ impl<'a> Log<'a> {
                 u64::from_le_bytes(data[at..at + 8].try_into().unwrap_or_default())
             }
         };
-        Row { timestamp, offset, data, subscription, schema: &self.meta.schema }
+        Row {
+            timestamp,
+            offset,
+            data,
+            subscription,
+            schema: &self.meta.schema,
+        }
     }
 }
 

@@ -81,7 +81,11 @@ impl FlagBits {
     /// The first incompatible bit this reader does not know, as `(byte, bit)`.
     pub fn unknown_incompat_bit(&self) -> Option<(usize, u8)> {
         self.incompat.iter().enumerate().find_map(|(byte, &v)| {
-            let unknown = if byte == 0 { v & !Self::INCOMPAT_DATA_APPENDED } else { v };
+            let unknown = if byte == 0 {
+                v & !Self::INCOMPAT_DATA_APPENDED
+            } else {
+                v
+            };
             (unknown != 0).then(|| (byte, unknown.trailing_zeros() as u8))
         })
     }
@@ -370,9 +374,15 @@ mod tests {
         let h = FileHeader::parse(&b).unwrap();
         assert_eq!((h.version, h.start_timestamp), (1, 1_234_567));
         assert_eq!(h.to_bytes().as_slice(), b.as_slice());
-        assert!(matches!(FileHeader::parse(&b[..10]), Err(crate::ReadError::TooShort { len: 10 })));
+        assert!(matches!(
+            FileHeader::parse(&b[..10]),
+            Err(crate::ReadError::TooShort { len: 10 })
+        ));
         b[0] = b'X';
-        assert!(matches!(FileHeader::parse(&b), Err(crate::ReadError::NotULog)));
+        assert!(matches!(
+            FileHeader::parse(&b),
+            Err(crate::ReadError::NotULog)
+        ));
     }
 
     #[test]
@@ -381,17 +391,23 @@ mod tests {
         p.extend_from_slice(&434_369u64.to_le_bytes());
         p.extend_from_slice(&0u64.to_le_bytes());
         p.extend_from_slice(&0u64.to_le_bytes());
-        let Message::FlagBits(bits) = parse(b'B', &p) else { panic!() };
+        let Message::FlagBits(bits) = parse(b'B', &p) else {
+            panic!()
+        };
         assert!(bits.has_data_appended() && bits.has_default_parameters());
         assert_eq!(bits.appended().collect::<Vec<_>>(), [434_369]);
         assert_eq!(bits.unknown_incompat_bit(), None);
         assert_eq!(bits.to_bytes().as_slice(), p.as_slice());
         p[8] = 0b101;
-        let Message::FlagBits(bits) = parse(b'B', &p) else { panic!() };
+        let Message::FlagBits(bits) = parse(b'B', &p) else {
+            panic!()
+        };
         assert_eq!(bits.unknown_incompat_bit(), Some((0, 2)));
         p[8] = 1;
         p[13] = 0x80;
-        let Message::FlagBits(bits) = parse(b'B', &p) else { panic!() };
+        let Message::FlagBits(bits) = parse(b'B', &p) else {
+            panic!()
+        };
         assert_eq!(bits.unknown_incompat_bit(), Some((5, 7)));
     }
 
@@ -403,52 +419,106 @@ mod tests {
         p.extend_from_slice(b"PX4");
         assert_eq!(
             parse(b'I', &p),
-            Message::Info(KeyValue { key: b"char[3] sys_name", value: b"PX4" })
+            Message::Info(KeyValue {
+                key: b"char[3] sys_name",
+                value: b"PX4"
+            })
         );
         assert!(matches!(parse(b'P', &p), Message::Parameter(_)));
         // M: is_continued, key_len, key, value
         let mut m = vec![1];
         m.extend_from_slice(&p);
-        assert!(matches!(parse(b'M', &m), Message::MultiInfo { continued: true, entry } if entry.value == b"PX4"));
+        assert!(
+            matches!(parse(b'M', &m), Message::MultiInfo { continued: true, entry } if entry.value == b"PX4")
+        );
         // Q: default_types, key_len, key, value
         let mut q = vec![3, 11];
         q.extend_from_slice(b"float PARAM");
         q.extend_from_slice(&1.5f32.to_le_bytes());
-        let Message::DefaultParameter { default_types, entry } = parse(b'Q', &q) else { panic!() };
+        let Message::DefaultParameter {
+            default_types,
+            entry,
+        } = parse(b'Q', &q)
+        else {
+            panic!()
+        };
         assert_eq!((default_types, entry.key), (3, &b"float PARAM"[..]));
         assert_eq!(entry.value, 1.5f32.to_le_bytes());
         // key_len beyond the end
         let e = Message::parse(b'I', &[200, b'a']).unwrap_err();
-        assert_eq!(e.to_string(), "malformed `I` message: key length runs past the end of the message");
+        assert_eq!(
+            e.to_string(),
+            "malformed `I` message: key length runs past the end of the message"
+        );
     }
 
     #[test]
     fn subscription_data_and_strings() {
         assert_eq!(
             parse(b'A', &[2, 0x34, 0x12, b'a', b'b']),
-            Message::Subscribe { multi_id: 2, msg_id: 0x1234, name: b"ab" }
+            Message::Subscribe {
+                multi_id: 2,
+                msg_id: 0x1234,
+                name: b"ab"
+            }
         );
         assert_eq!(parse(b'R', &[7, 0]), Message::Unsubscribe { msg_id: 7 });
-        assert_eq!(parse(b'D', &[1, 0, 9, 9]), Message::Data { msg_id: 1, data: &[9, 9] });
+        assert_eq!(
+            parse(b'D', &[1, 0, 9, 9]),
+            Message::Data {
+                msg_id: 1,
+                data: &[9, 9]
+            }
+        );
         let mut l = vec![b'6'];
         l.extend_from_slice(&99u64.to_le_bytes());
         l.extend_from_slice(b"hi");
         assert_eq!(
             parse(b'L', &l),
-            Message::Logging { level: b'6', tag: None, timestamp: 99, text: b"hi" }
+            Message::Logging {
+                level: b'6',
+                tag: None,
+                timestamp: 99,
+                text: b"hi"
+            }
         );
         let mut c = vec![b'3', 5, 0];
         c.extend_from_slice(&77u64.to_le_bytes());
         c.extend_from_slice(b"tagged");
         assert_eq!(
             parse(b'C', &c),
-            Message::Logging { level: b'3', tag: Some(5), timestamp: 77, text: b"tagged" }
+            Message::Logging {
+                level: b'3',
+                tag: Some(5),
+                timestamp: 77,
+                text: b"tagged"
+            }
         );
         assert_eq!(parse(b'S', &SYNC_MAGIC), Message::Sync);
-        assert_eq!(parse(b'O', &[119, 0]), Message::Dropout { duration_ms: 119 });
-        assert_eq!(parse(b'z', &[1]), Message::Unknown { ty: b'z', payload: &[1] });
-        for (ty, short) in [(b'L', 8), (b'C', 10), (b'D', 1), (b'A', 3), (b'B', 39), (b'S', 7)] {
-            assert!(Message::parse(ty, &vec![b'0'; short]).is_err(), "{}", ty as char);
+        assert_eq!(
+            parse(b'O', &[119, 0]),
+            Message::Dropout { duration_ms: 119 }
+        );
+        assert_eq!(
+            parse(b'z', &[1]),
+            Message::Unknown {
+                ty: b'z',
+                payload: &[1]
+            }
+        );
+        for (ty, short) in [
+            (b'L', 8),
+            (b'C', 10),
+            (b'D', 1),
+            (b'A', 3),
+            (b'B', 39),
+            (b'S', 7),
+        ] {
+            assert!(
+                Message::parse(ty, &vec![b'0'; short]).is_err(),
+                "{}",
+                ty as char
+            );
         }
     }
 }

@@ -3,7 +3,7 @@
 
 use std::collections::HashMap;
 
-use super::message::{FileHeader, FlagBits, KeyValue, Message, KNOWN_VERSION};
+use super::message::{FileHeader, FlagBits, KNOWN_VERSION, KeyValue, Message};
 use crate::error::{Diagnostic, DiagnosticKind, ReadError};
 use crate::schema::{Field, Format, FormatId, Primitive, Schema, TypeRef};
 use crate::value::{RowPlan, Value};
@@ -130,7 +130,9 @@ impl LogLevel {
             LogLevel::Info,
             LogLevel::Debug,
         ];
-        LEVELS.get(usize::from(if b >= b'0' { b - b'0' } else { b })).copied()
+        LEVELS
+            .get(usize::from(if b >= b'0' { b - b'0' } else { b }))
+            .copied()
     }
 
     /// The name pyulog prints: `EMERGENCY`, `ALERT`, `CRITICAL`, `ERROR`, `WARNING`, `NOTICE`,
@@ -385,7 +387,10 @@ impl Metadata {
                     Err(_) => return diag(invalid_utf8("format definition", text)),
                 };
                 match Format::parse(text) {
-                    Err(error) => diag(DiagnosticKind::InvalidFormat { text: text.to_owned(), error }),
+                    Err(error) => diag(DiagnosticKind::InvalidFormat {
+                        text: text.to_owned(),
+                        error,
+                    }),
                     Ok(format) => match self.schema.insert(format) {
                         Ok(_) => Ok(Applied::Nothing),
                         Err(e) => diag(DiagnosticKind::Redefinition(e)),
@@ -402,7 +407,11 @@ impl Metadata {
                         existing.type_name = type_name;
                         existing.value = value;
                     }
-                    None => self.info.push(Info { key: field.name, type_name, value }),
+                    None => self.info.push(Info {
+                        key: field.name,
+                        type_name,
+                        value,
+                    }),
                 }
                 Ok(Applied::Nothing)
             }
@@ -442,15 +451,26 @@ impl Metadata {
                 }
                 Ok(Applied::Nothing)
             }
-            Message::DefaultParameter { default_types, entry } => {
+            Message::DefaultParameter {
+                default_types,
+                entry,
+            } => {
                 let (name, value) = match param_value(entry) {
                     Ok(x) => x,
                     Err(kind) => return diag(kind),
                 };
-                self.default_parameters.push(DefaultParameter { default_types, name, value });
+                self.default_parameters.push(DefaultParameter {
+                    default_types,
+                    name,
+                    value,
+                });
                 Ok(Applied::Nothing)
             }
-            Message::Subscribe { multi_id, msg_id, name } => {
+            Message::Subscribe {
+                multi_id,
+                msg_id,
+                name,
+            } => {
                 self.in_data_section = true;
                 self.subscribe(offset, multi_id, msg_id, name)
             }
@@ -462,7 +482,12 @@ impl Metadata {
                 self.in_data_section = true;
                 self.data(offset, msg_id, data)
             }
-            Message::Logging { level, tag, timestamp, text } => {
+            Message::Logging {
+                level,
+                tag,
+                timestamp,
+                text,
+            } => {
                 self.in_data_section = true;
                 Ok(Applied::Logged(LoggedMessage {
                     level_byte: level,
@@ -478,7 +503,11 @@ impl Metadata {
             Message::Dropout { duration_ms } => {
                 self.in_data_section = true;
                 self.dropouts_us += u64::from(duration_ms) * 1000;
-                Ok(Applied::Dropout(Dropout { timestamp: self.last_timestamp, duration_ms, offset }))
+                Ok(Applied::Dropout(Dropout {
+                    timestamp: self.last_timestamp,
+                    duration_ms,
+                    offset,
+                }))
             }
             Message::Unknown { ty, payload } => diag(DiagnosticKind::UnknownMessageType {
                 ty,
@@ -487,7 +516,13 @@ impl Metadata {
         }
     }
 
-    fn subscribe(&mut self, offset: u64, multi_id: u8, msg_id: u16, name: &[u8]) -> Result<Applied, ReadError> {
+    fn subscribe(
+        &mut self,
+        offset: u64,
+        multi_id: u8,
+        msg_id: u16,
+        name: &[u8],
+    ) -> Result<Applied, ReadError> {
         let diag = |kind| Ok(Applied::Diagnostic(Diagnostic { offset, kind }));
         let name = match std::str::from_utf8(name) {
             Ok(n) => n.to_owned(),
@@ -515,7 +550,11 @@ impl Metadata {
             }
             Some(id) => match RowPlan::check(&mut self.schema, id) {
                 Err(error) => {
-                    problem = Some(DiagnosticKind::BadSubscription { topic: sub.name.clone(), msg_id, error });
+                    problem = Some(DiagnosticKind::BadSubscription {
+                        topic: sub.name.clone(),
+                        msg_id,
+                        error,
+                    });
                 }
                 Ok(layout) => {
                     sub.format = Some(id);
@@ -529,7 +568,9 @@ impl Metadata {
                         _ => None,
                     });
                     if sub.timestamp.is_none() {
-                        problem = Some(DiagnosticKind::MissingTimestamp { topic: sub.name.clone() });
+                        problem = Some(DiagnosticKind::MissingTimestamp {
+                            topic: sub.name.clone(),
+                        });
                     }
                 }
             },
@@ -555,7 +596,10 @@ impl Metadata {
 
     fn data(&mut self, offset: u64, msg_id: u16, data: &[u8]) -> Result<Applied, ReadError> {
         let Some(&index) = self.by_msg_id.get(&msg_id) else {
-            return Ok(Applied::Diagnostic(Diagnostic { offset, kind: DiagnosticKind::UnknownMsgId { msg_id } }));
+            return Ok(Applied::Diagnostic(Diagnostic {
+                offset,
+                kind: DiagnosticKind::UnknownMsgId { msg_id },
+            }));
         };
         let sub = &mut self.subscriptions[index];
         let Some((min, max)) = sub.sizes else {
@@ -593,19 +637,28 @@ impl Metadata {
         if timestamp > self.last_timestamp {
             self.last_timestamp = timestamp;
         }
-        Ok(Applied::Row { sub: index, timestamp })
+        Ok(Applied::Row {
+            sub: index,
+            timestamp,
+        })
     }
 }
 
 fn invalid_utf8(what: &'static str, bytes: &[u8]) -> DiagnosticKind {
-    DiagnosticKind::InvalidUtf8 { what, text: String::from_utf8_lossy(bytes).into_owned() }
+    DiagnosticKind::InvalidUtf8 {
+        what,
+        text: String::from_utf8_lossy(bytes).into_owned(),
+    }
 }
 
 /// Decodes the key and value of an `I`/`M`/`P`/`Q` message.
 fn typed_value(kv: KeyValue<'_>) -> Result<(Field, String, Value), DiagnosticKind> {
     let key = std::str::from_utf8(kv.key).map_err(|_| invalid_utf8("info key", kv.key))?;
-    let invalid = |reason: String| DiagnosticKind::InvalidValue { key: key.to_owned(), reason };
-    let field = Field::parse(key).map_err(|e| invalid(e.to_string()))?;
+    let invalid = |reason: String| DiagnosticKind::InvalidValue {
+        key: key.to_owned(),
+        reason,
+    };
+    let field = Field::parse_key(key).map_err(|e| invalid(e.to_string()))?;
     let TypeRef::Primitive(p) = field.ty else {
         return Err(invalid(format!("`{}` is not a basic type", field.ty)));
     };
@@ -619,7 +672,10 @@ fn typed_value(kv: KeyValue<'_>) -> Result<(Field, String, Value), DiagnosticKin
     } else {
         let expected = field.count() * p.size();
         if kv.value.len() != expected {
-            return Err(invalid(format!("{} value bytes, the type needs {expected}", kv.value.len())));
+            return Err(invalid(format!(
+                "{} value bytes, the type needs {expected}",
+                kv.value.len()
+            )));
         }
         Value::decode_primitive(p, field.array_len.map(usize::from), kv.value, false)
             .ok_or_else(|| invalid("undecodable".to_owned()))?
@@ -662,7 +718,10 @@ mod tests {
         let mut d = Clock::default();
         assert_eq!(d.unwrap(Primitive::UInt16, 1_000, 0), 1_000);
         assert_eq!(d.unwrap(Primitive::UInt16, 2_000, 70_000), 2_000 + 65_536);
-        assert_eq!(Clock::default().unwrap(Primitive::UInt64, u64::MAX, 0), u64::MAX);
+        assert_eq!(
+            Clock::default().unwrap(Primitive::UInt64, u64::MAX, 0),
+            u64::MAX
+        );
     }
 
     #[test]

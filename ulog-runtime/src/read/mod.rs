@@ -68,8 +68,14 @@ impl<'a> Row<'a> {
 
 /// What one step of walking a file produced.
 enum Step<'w> {
-    Applied { offset: u64, applied: Applied, payload: &'w [u8] },
-    NeedMore { keep_from: u64 },
+    Applied {
+        offset: u64,
+        applied: Applied,
+        payload: &'w [u8],
+    },
+    NeedMore {
+        keep_from: u64,
+    },
     End,
 }
 
@@ -81,7 +87,10 @@ struct Walker {
 
 impl Walker {
     fn new(header: FileHeader) -> Walker {
-        Walker { framer: Framer::new(), meta: Metadata::new(header) }
+        Walker {
+            framer: Framer::new(),
+            meta: Metadata::new(header),
+        }
     }
 
     fn step<'w>(&mut self, w: &'w [u8], base: u64, eof: bool) -> Result<Step<'w>, ReadError> {
@@ -96,19 +105,38 @@ impl Walker {
                 let payload = &w[start..start + usize::from(size)];
                 let applied = match Message::parse(ty, payload) {
                     Ok(msg) => self.meta.apply(offset, msg)?,
-                    Err(e) => Applied::Diagnostic(Diagnostic { offset, kind: DiagnosticKind::Malformed(e) }),
+                    Err(e) => Applied::Diagnostic(Diagnostic {
+                        offset,
+                        kind: DiagnosticKind::Malformed(e),
+                    }),
                 };
                 if let Applied::Subscribed { msg_id, min, max } = applied {
                     self.framer.subscribe(msg_id, min, max);
                 }
-                Step::Applied { offset, applied, payload }
+                Step::Applied {
+                    offset,
+                    applied,
+                    payload,
+                }
             }
-            Frame::Skipped { from, to } => diag(from, DiagnosticKind::Skipped { to, len: to - from }),
+            Frame::Skipped { from, to } => {
+                diag(from, DiagnosticKind::Skipped { to, len: to - from })
+            }
             Frame::Overlap { prev, next } => diag(prev, DiagnosticKind::Overlap { next }),
-            Frame::Truncated { offset, declared, available } => {
-                diag(offset, DiagnosticKind::Truncated { declared, available })
+            Frame::Truncated {
+                offset,
+                declared,
+                available,
+            } => diag(
+                offset,
+                DiagnosticKind::Truncated {
+                    declared,
+                    available,
+                },
+            ),
+            Frame::BadAppendedOffset { offset } => {
+                diag(offset, DiagnosticKind::BadAppendedOffset(offset))
             }
-            Frame::BadAppendedOffset { offset } => diag(offset, DiagnosticKind::BadAppendedOffset(offset)),
             Frame::NeedMore { keep_from } => Step::NeedMore { keep_from },
             Frame::End => Step::End,
         })

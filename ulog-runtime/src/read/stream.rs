@@ -6,8 +6,8 @@ use std::io::Read;
 use super::message::{FileHeader, HEADER_LEN, MessageType};
 use super::metadata::Applied;
 use super::{
-    Diagnostic, Dropout, LoggedMessage, Metadata, ParameterChange, ReadError, Row, Step, Subscription,
-    Walker,
+    Diagnostic, Dropout, LoggedMessage, Metadata, ParameterChange, ReadError, Row, Step,
+    Subscription, Walker,
 };
 
 /// Bytes read from the input at a time.
@@ -115,7 +115,11 @@ impl<R: Read> StreamReader<R> {
                     let keep_from = keep_from.max(self.base);
                     self.fill(keep_from)?;
                 }
-                Step::Applied { offset, applied, payload } => {
+                Step::Applied {
+                    offset,
+                    applied,
+                    payload,
+                } => {
                     let event = match applied {
                         Applied::Nothing => {
                             let ty = self.buf[(offset - self.base) as usize + 2];
@@ -129,7 +133,8 @@ impl<R: Read> StreamReader<R> {
                             Event::Subscription(sub)
                         }
                         Applied::Row { sub, timestamp } => {
-                            let start = (offset - self.base) as usize + super::MESSAGE_HEADER_LEN + 2;
+                            let start =
+                                (offset - self.base) as usize + super::MESSAGE_HEADER_LEN + 2;
                             let len = payload.len() - 2;
                             Event::Row(Row {
                                 timestamp,

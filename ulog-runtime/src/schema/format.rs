@@ -63,10 +63,16 @@ impl Field {
         self.array_len.map_or(1, usize::from)
     }
 
-    /// Parses a single field such as `float[4] q` (no trailing `;`). This is also the syntax
-    /// of `I`, `M`, `P` and `Q` keys, which may declare `char[0]`.
+    /// Parses a single format field such as `float[4] q` (no trailing `;`).
     pub fn parse(s: &str) -> Result<Field, FormatError> {
-        parse_field(s, 0, true)
+        parse_field(s, 0, Syntax::Format)
+    }
+
+    /// Parses the key of an `I`, `M`, `P` or `Q` message: the field syntax, except that the
+    /// length may be 0 (`char[0]`) and the name may hold any visible ASCII character, as PX4
+    /// writes keys such as `perf_counter_preflight-00`.
+    pub fn parse_key(s: &str) -> Result<Field, FormatError> {
+        parse_field(s, 0, Syntax::Key)
     }
 }
 
@@ -121,7 +127,7 @@ impl Format {
             let Some(rel) = s[pos..].find(';') else {
                 return Err(FormatError::new(s.len(), FormatErrorKind::MissingSemicolon));
             };
-            let field = parse_field(&s[pos..pos + rel], pos, false)?;
+            let field = parse_field(&s[pos..pos + rel], pos, Syntax::Format)?;
             if fields.iter().any(|f| f.name == field.name) {
                 let name_pos = pos + rel - field.name.len();
                 return Err(FormatError::new(
@@ -266,7 +272,10 @@ pub fn check_message_name(name: &str, base: usize) -> Result<(), FormatError> {
 
 fn check_type_name(name: &str, base: usize) -> Result<(), FormatError> {
     if let Some((i, c)) = name.char_indices().find(|&(_, c)| !is_message_name_char(c)) {
-        return Err(FormatError::new(base + i, FormatErrorKind::InvalidNameChar(c)));
+        return Err(FormatError::new(
+            base + i,
+            FormatErrorKind::InvalidNameChar(c),
+        ));
     }
     Ok(())
 }
@@ -277,13 +286,22 @@ pub fn check_field_name(name: &str, base: usize) -> Result<(), FormatError> {
         return Err(FormatError::new(base, FormatErrorKind::EmptyFieldName));
     }
     if let Some((i, c)) = name.char_indices().find(|&(_, c)| !is_field_name_char(c)) {
-        return Err(FormatError::new(base + i, FormatErrorKind::InvalidFieldNameChar(c)));
+        return Err(FormatError::new(
+            base + i,
+            FormatErrorKind::InvalidFieldNameChar(c),
+        ));
     }
     Ok(())
 }
 
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Syntax {
+    Format,
+    Key,
+}
+
 /// Parses `type name` / `type[N] name`; `base` is the byte position of `s` in the whole string.
-fn parse_field(s: &str, base: usize, allow_zero_len: bool) -> Result<Field, FormatError> {
+fn parse_field(s: &str, base: usize, syntax: Syntax) -> Result<Field, FormatError> {
     if s.is_empty() {
         return Err(FormatError::new(base, FormatErrorKind::EmptyField));
     }
@@ -323,7 +341,7 @@ fn parse_field(s: &str, base: usize, allow_zero_len: bool) -> Result<Field, Form
             trimmed.parse::<u32>().ok().or(Some(0))
         };
         match len {
-            Some(0) if !allow_zero_len => {
+            Some(0) if syntax == Syntax::Format => {
                 return Err(FormatError::new(
                     base + digits_start,
                     FormatErrorKind::ZeroArrayLength,
@@ -344,7 +362,23 @@ fn parse_field(s: &str, base: usize, allow_zero_len: bool) -> Result<Field, Form
     }
     pos += 1;
     let name = &s[pos..];
-    check_field_name(name, base + pos)?;
+    match syntax {
+        Syntax::Format => check_field_name(name, base + pos)?,
+        Syntax::Key => {
+            if name.is_empty() {
+                return Err(FormatError::new(
+                    base + pos,
+                    FormatErrorKind::EmptyFieldName,
+                ));
+            }
+            if let Some((i, c)) = name.char_indices().find(|&(_, c)| !c.is_ascii_graphic()) {
+                return Err(FormatError::new(
+                    base + pos + i,
+                    FormatErrorKind::InvalidFieldNameChar(c),
+                ));
+            }
+        }
+    }
     Ok(Field {
         ty: TypeRef::from_name(type_name),
         array_len,
@@ -396,24 +430,64 @@ mod tests {
             ("no_colon", 8, FormatErrorKind::MissingColon),
             (":uint8_t a;", 0, FormatErrorKind::EmptyName),
             ("a b:uint8_t a;", 1, FormatErrorKind::InvalidNameChar(' ')),
-            ("float:uint8_t a;", 0, FormatErrorKind::NameIsBasicType("float".into())),
+            (
+                "float:uint8_t a;",
+                0,
+                FormatErrorKind::NameIsBasicType("float".into()),
+            ),
             ("m:uint8_t a", 11, FormatErrorKind::MissingSemicolon),
             ("m:uint8_t a;;", 12, FormatErrorKind::EmptyField),
             ("m:", 2, FormatErrorKind::NoFields),
             ("m: a;", 2, FormatErrorKind::EmptyType),
-            ("m:uint8_t[] a;", 10, FormatErrorKind::BadArrayLength("no digits between `[` and `]`")),
-            ("m:uint8_t[x] a;", 10, FormatErrorKind::BadArrayLength("not a decimal number")),
-            ("m:uint8_t[3 a;", 9, FormatErrorKind::BadArrayLength("missing `]`")),
+            (
+                "m:uint8_t[] a;",
+                10,
+                FormatErrorKind::BadArrayLength("no digits between `[` and `]`"),
+            ),
+            (
+                "m:uint8_t[x] a;",
+                10,
+                FormatErrorKind::BadArrayLength("not a decimal number"),
+            ),
+            (
+                "m:uint8_t[3 a;",
+                9,
+                FormatErrorKind::BadArrayLength("missing `]`"),
+            ),
             ("m:uint8_t[0] a;", 10, FormatErrorKind::ZeroArrayLength),
-            ("m:uint8_t[65536] a;", 10, FormatErrorKind::ArrayLengthTooLarge("65536".into())),
-            ("m:uint8_t[99999999999999999999] a;", 10, FormatErrorKind::ArrayLengthTooLarge("99999999999999999999".into())),
+            (
+                "m:uint8_t[65536] a;",
+                10,
+                FormatErrorKind::ArrayLengthTooLarge("65536".into()),
+            ),
+            (
+                "m:uint8_t[99999999999999999999] a;",
+                10,
+                FormatErrorKind::ArrayLengthTooLarge("99999999999999999999".into()),
+            ),
             ("m:uint8_t[2][3] a;", 12, FormatErrorKind::MissingSpace),
             ("m:uint8_t ;", 10, FormatErrorKind::EmptyFieldName),
-            ("m:uint8_t  a;", 10, FormatErrorKind::InvalidFieldNameChar(' ')),
-            ("m:uint8_t a-b;", 11, FormatErrorKind::InvalidFieldNameChar('-')),
-            ("m:uint8_t é;", 10, FormatErrorKind::InvalidFieldNameChar('é')),
+            (
+                "m:uint8_t  a;",
+                10,
+                FormatErrorKind::InvalidFieldNameChar(' '),
+            ),
+            (
+                "m:uint8_t a-b;",
+                11,
+                FormatErrorKind::InvalidFieldNameChar('-'),
+            ),
+            (
+                "m:uint8_t é;",
+                10,
+                FormatErrorKind::InvalidFieldNameChar('é'),
+            ),
             ("m:ui.nt8_t a;", 4, FormatErrorKind::InvalidNameChar('.')),
-            ("m:uint8_t a;float a;", 18, FormatErrorKind::DuplicateField("a".into())),
+            (
+                "m:uint8_t a;float a;",
+                18,
+                FormatErrorKind::DuplicateField("a".into()),
+            ),
         ];
         for (s, pos, kind) in cases {
             let e = err(s);
@@ -431,10 +505,19 @@ mod tests {
     }
 
     #[test]
-    fn info_keys_may_declare_char_zero() {
-        let f = Field::parse("char[0] sys_uuid").unwrap();
+    fn info_keys_are_laxer_than_format_fields() {
+        let f = Field::parse_key("char[0] sys_uuid").unwrap();
         assert_eq!(f.array_len, Some(0));
+        assert!(Field::parse("char[0] sys_uuid").is_err());
+        assert_eq!(
+            Field::parse_key("uint32_t perf_counter_preflight-00")
+                .unwrap()
+                .name,
+            "perf_counter_preflight-00"
+        );
+        assert!(Field::parse("uint32_t perf-counter").is_err());
         assert_eq!(Field::parse("int32_t[2] x").unwrap().count(), 2);
-        assert!(Field::parse("int32_t").is_err());
+        assert!(Field::parse_key("int32_t").is_err());
+        assert!(Field::parse_key("int32_t a b").is_err());
     }
 }

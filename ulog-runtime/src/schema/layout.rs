@@ -424,13 +424,19 @@ mod tests {
     fn unknown_types_and_cycles_are_reported() {
         let mut s = schema(&["a:b x;", "b:c y;", "c:a z;", "d:nope n;", "e:d q;"]);
         let cycle = s.layout_by_name("a").unwrap_err();
-        assert_eq!(cycle, LayoutError::Cycle(vec!["a".into(), "b".into(), "c".into(), "a".into()]));
+        assert_eq!(
+            cycle,
+            LayoutError::Cycle(vec!["a".into(), "b".into(), "c".into(), "a".into()])
+        );
         assert!(matches!(s.layout_by_name("b"), Err(LayoutError::Cycle(_))));
         assert_eq!(
             s.layout_by_name("d").unwrap_err().to_string(),
             "d.n: type `nope` is not a basic type and no format defines it"
         );
-        assert!(matches!(s.layout_by_name("e"), Err(LayoutError::InvalidNested { .. })));
+        assert!(matches!(
+            s.layout_by_name("e"),
+            Err(LayoutError::InvalidNested { .. })
+        ));
         // Defining the missing type later completes the formats that needed it.
         s.insert("nope:uint8_t v;".parse().unwrap()).unwrap();
         assert_eq!(s.layout_by_name("e").unwrap().size, 1);
@@ -439,17 +445,30 @@ mod tests {
     #[test]
     fn self_reference_is_a_cycle() {
         let mut s = schema(&["a:uint8_t v;a w;"]);
-        assert_eq!(s.layout_by_name("a").unwrap_err(), LayoutError::Cycle(vec!["a".into(), "a".into()]));
+        assert_eq!(
+            s.layout_by_name("a").unwrap_err(),
+            LayoutError::Cycle(vec!["a".into(), "a".into()])
+        );
     }
 
     #[test]
     fn oversized_formats_are_refused_without_overflow() {
-        let mut s = schema(&["big:uint64_t[65535] v;", "huge:big[65535] b;", "ok:uint8_t[65533] v;"]);
+        let mut s = schema(&[
+            "big:uint64_t[65535] v;",
+            "huge:big[65535] b;",
+            "ok:uint8_t[65533] v;",
+        ]);
         assert_eq!(
             s.layout_by_name("big").unwrap_err(),
-            LayoutError::TooLarge { format: "big".into(), size: 8 * 65535 }
+            LayoutError::TooLarge {
+                format: "big".into(),
+                size: 8 * 65535
+            }
         );
-        assert!(matches!(s.layout_by_name("huge"), Err(LayoutError::InvalidNested { .. })));
+        assert!(matches!(
+            s.layout_by_name("huge"),
+            Err(LayoutError::InvalidNested { .. })
+        ));
         assert_eq!(s.layout_by_name("ok").unwrap().size, MAX_DATA_SIZE);
     }
 
@@ -457,7 +476,8 @@ mod tests {
     fn deep_nesting_does_not_overflow_the_stack() {
         let mut s = Schema::new();
         for i in 0..20_000 {
-            s.insert(format!("t{i}:t{} n;", i + 1).parse().unwrap()).unwrap();
+            s.insert(format!("t{i}:t{} n;", i + 1).parse().unwrap())
+                .unwrap();
         }
         s.insert("t20000:uint8_t v;".parse().unwrap()).unwrap();
         assert_eq!(s.layout_by_name("t0").unwrap().size, 1);
@@ -467,8 +487,14 @@ mod tests {
     #[test]
     fn redefinition_is_refused_but_repetition_is_not() {
         let mut s = schema(&["a:uint8_t v;"]);
-        assert_eq!(s.insert("a:uint8_t v;".parse().unwrap()).unwrap().index(), 0);
+        assert_eq!(
+            s.insert("a:uint8_t v;".parse().unwrap()).unwrap().index(),
+            0
+        );
         let e = s.insert("a:uint16_t v;".parse().unwrap()).unwrap_err();
-        assert_eq!(e.to_string(), "format `a` is defined twice, differently: `a:uint8_t v;` and `a:uint16_t v;`");
+        assert_eq!(
+            e.to_string(),
+            "format `a` is defined twice, differently: `a:uint8_t v;` and `a:uint16_t v;`"
+        );
     }
 }

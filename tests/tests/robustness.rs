@@ -1,0 +1,1 @@
+//! Robustness suite (see below).
