@@ -22,6 +22,14 @@ pub enum ReadError {
         /// Bytes available.
         len: usize,
     },
+    /// The file is larger than the whole-file reader can index (1 TiB); stream it instead.
+    #[error(
+        "file of {len} bytes is larger than the 1 TiB the whole-file reader indexes; use StreamReader"
+    )]
+    FileTooLarge {
+        /// Its length.
+        len: u64,
+    },
     /// The flag bits set an incompatible flag this reader does not know.
     #[error(
         "unknown incompatible flag: bit {bit} of incompat byte {byte} is set \
@@ -147,6 +155,12 @@ pub enum DiagnosticKind {
         msg_id: u16,
         /// Why.
         error: PlanError,
+    },
+    /// More subscriptions than a reader indexes (2^24); this one is ignored.
+    #[error("more than 16777216 subscriptions; `{topic}` ignored")]
+    TooManySubscriptions {
+        /// The topic.
+        topic: String,
     },
     /// A subscription reuses a `msg_id`; later data goes to the new one.
     #[error("msg_id {msg_id} subscribed again (was `{previous}`), now `{topic}`")]

@@ -100,6 +100,36 @@ impl Framer {
         };
     }
 
+    /// Fast path for whole-file reading (window = the whole file from offset 0): the `D`
+    /// message at the current position if it is strongly plausible, as `(offset, size)`,
+    /// without moving; [`Framer::commit`] then accepts it. `None` means "take the general path".
+    #[inline]
+    pub(crate) fn peek_data(&self, file: &[u8]) -> Option<(usize, usize)> {
+        if self.resync.is_some() || !self.notices.is_empty() {
+            return None;
+        }
+        let p = self.pos as usize;
+        let h = file.get(p..p + MESSAGE_HEADER_LEN + 2)?;
+        if h[2] != b'D' {
+            return None;
+        }
+        let size = u16::from_le_bytes([h[0], h[1]]);
+        let range = self.d_sizes[usize::from(u16::from_le_bytes([h[3], h[4]]))];
+        let end = p + MESSAGE_HEADER_LEN + usize::from(size);
+        (range.min <= size
+            && size <= range.max
+            && end as u64 <= self.segment_end
+            && end <= file.len())
+        .then_some((p, usize::from(size)))
+    }
+
+    /// Accepts the message found by [`Framer::peek_data`].
+    #[inline]
+    pub(crate) fn commit(&mut self, offset: usize, size: usize) {
+        self.prev = Some(offset as u64);
+        self.pos = (offset + MESSAGE_HEADER_LEN + size) as u64;
+    }
+
     /// The next frame of the window `[base, base + w.len())`; `eof` says the window reaches the
     /// end of the file.
     pub(crate) fn next(&mut self, w: &[u8], base: u64, eof: bool) -> Frame {

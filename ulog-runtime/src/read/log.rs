@@ -28,12 +28,28 @@ impl Bytes<'_> {
     }
 }
 
-/// Where a subscription's rows are.
-#[derive(Debug, Default, Clone)]
-struct RowIndex {
-    offsets: Vec<u64>,
-    /// Unwrapped timestamps, kept only for subscriptions whose `timestamp` is not `uint64_t`.
-    timestamps: Option<Vec<u64>>,
+/// One data row in the file-order index: the message offset in the high 40 bits, the
+/// subscription index in the low 24.
+#[derive(Debug, Clone, Copy)]
+struct RowRef(u64);
+
+const SUB_BITS: u32 = 24;
+/// Largest file the row index can address (1 TiB).
+const MAX_FILE_LEN: u64 = 1 << (64 - SUB_BITS);
+
+impl RowRef {
+    #[inline]
+    fn new(offset: usize, sub: usize) -> RowRef {
+        RowRef(((offset as u64) << SUB_BITS) | sub as u64)
+    }
+    #[inline]
+    fn offset(self) -> usize {
+        (self.0 >> SUB_BITS) as usize
+    }
+    #[inline]
+    fn sub(self) -> usize {
+        (self.0 & ((1 << SUB_BITS) - 1)) as usize
+    }
 }
 
 /// A whole ULog file, read once at open, then accessed in place.
@@ -57,9 +73,12 @@ struct RowIndex {
 pub struct Log<'a> {
     bytes: Bytes<'a>,
     meta: Metadata,
-    rows: Vec<RowIndex>,
-    /// Subscription index of every row, in file order.
-    order: Vec<u32>,
+    /// Every row, in file order.
+    index: Vec<RowRef>,
+    /// Unwrapped timestamps of rows whose `timestamp` is not `uint64_t`, by row number.
+    other_timestamps: Vec<(usize, u64)>,
+    /// Row numbers per subscription, built at the first per-subscription access.
+    by_sub: std::sync::OnceLock<Vec<Vec<usize>>>,
     logged: Vec<LoggedMessage>,
     changes: Vec<ParameterChange>,
     dropouts: Vec<Dropout>,
@@ -73,7 +92,7 @@ impl std::fmt::Debug for Log<'_> {
             .field("len", &self.bytes.as_slice().len())
             .field("header", &self.meta.header)
             .field("subscriptions", &self.meta.subscriptions.len())
-            .field("rows", &self.order.len())
+            .field("rows", &self.index.len())
             .field("diagnostics", &self.diagnostics.len())
             .finish_non_exhaustive()
     }
@@ -114,11 +133,18 @@ impl<'a> Log<'a> {
     fn from_bytes(bytes: Bytes<'a>) -> Result<Log<'a>, ReadError> {
         let data = bytes.as_slice();
         let header = FileHeader::parse(data)?;
+        if data.len() as u64 >= MAX_FILE_LEN {
+            return Err(ReadError::FileTooLarge {
+                len: data.len() as u64,
+            });
+        }
         let mut walker = Walker::new(header);
         let mut log = Log {
             meta: Metadata::new(header),
-            rows: Vec::new(),
-            order: Vec::new(),
+            // Real logs average well over 32 bytes a row; a wrong guess only costs a regrowth.
+            index: Vec::with_capacity(data.len() / 32),
+            other_timestamps: Vec::new(),
+            by_sub: std::sync::OnceLock::new(),
             logged: Vec::new(),
             changes: Vec::new(),
             dropouts: Vec::new(),
@@ -127,28 +153,22 @@ impl<'a> Log<'a> {
             bytes: Bytes::Borrowed(&[]),
         };
         loop {
+            if let Some((offset, sub, _)) = walker.fast_row(data) {
+                log.index.push(RowRef::new(offset, sub));
+                continue;
+            }
             match walker.step(data, 0, true)? {
                 Step::Applied {
                     offset, applied, ..
                 } => match applied {
-                    Applied::Nothing => {}
-                    Applied::Subscribed { .. } => {}
+                    Applied::Nothing | Applied::Subscribed { .. } => {}
                     Applied::Row { sub, timestamp } => {
-                        if log.rows.len() <= sub {
-                            log.rows
-                                .resize_with(walker.meta.subscriptions.len(), RowIndex::default);
-                        }
-                        let index = &mut log.rows[sub];
-                        index.offsets.push(offset);
                         if walker.meta.subscriptions[sub].timestamp_type()
                             != Some(Primitive::UInt64)
                         {
-                            index
-                                .timestamps
-                                .get_or_insert_with(Vec::new)
-                                .push(timestamp);
+                            log.other_timestamps.push((log.index.len(), timestamp));
                         }
-                        log.order.push(sub as u32);
+                        log.index.push(RowRef::new(offset as usize, sub));
                     }
                     Applied::Logged(m) => log.logged.push(m),
                     Applied::Dropout(d) => log.dropouts.push(d),
@@ -159,8 +179,7 @@ impl<'a> Log<'a> {
                 Step::NeedMore { .. } | Step::End => break,
             }
         }
-        log.rows
-            .resize_with(walker.meta.subscriptions.len(), RowIndex::default);
+        log.index.shrink_to_fit();
         log.meta = walker.meta;
         log.bytes = bytes;
         Ok(log)
@@ -205,27 +224,47 @@ impl<'a> Log<'a> {
     /// # Panics
     /// If `sub` does not come from this log.
     pub fn rows<'s>(&'s self, sub: &'s Subscription) -> Rows<'s> {
-        let index = self.sub_index(sub);
+        assert!(
+            self.meta
+                .subscriptions
+                .get(sub.index)
+                .is_some_and(|s| std::ptr::eq(s, sub)),
+            "the subscription belongs to this log"
+        );
+        let by_sub = self.by_sub.get_or_init(|| {
+            let mut by_sub = vec![Vec::new(); self.meta.subscriptions.len()];
+            for (i, r) in self.index.iter().enumerate() {
+                by_sub[r.sub()].push(i);
+            }
+            by_sub
+        });
         Rows {
             log: self,
-            sub: index,
-            next: 0,
-            end: self.rows[index].offsets.len(),
+            rows: by_sub[sub.index].iter(),
         }
     }
 
     /// Every data row of every subscription, in file order.
     pub fn data(&self) -> DataRows<'_> {
-        DataRows {
-            log: self,
-            next: 0,
-            cursors: vec![0; self.rows.len()],
-        }
+        self.data_range(0..self.index.len())
+    }
+
+    /// The data rows numbered `range` in file order (row `i` is the `i`-th of
+    /// [`Log::data`]), e.g. to decode parts of a file on several threads.
+    ///
+    /// # Panics
+    /// If the range goes beyond [`Log::row_count`].
+    pub fn data_range(&self, range: std::ops::Range<usize>) -> DataRows<'_> {
+        assert!(
+            range.start <= range.end && range.end <= self.index.len(),
+            "row range out of bounds"
+        );
+        DataRows { log: self, range }
     }
 
     /// Total number of data rows read.
     pub fn row_count(&self) -> usize {
-        self.order.len()
+        self.index.len()
     }
 
     /// Logged strings (`L` and `C`), in file order.
@@ -271,34 +310,27 @@ impl<'a> Log<'a> {
         })
     }
 
-    fn sub_index(&self, sub: &Subscription) -> usize {
-        let index = self
-            .meta
-            .subscriptions
-            .iter()
-            .position(|s| std::ptr::eq(s, sub))
-            .expect("the subscription belongs to this log");
-        index
-    }
-
-    fn row(&self, sub: usize, i: usize) -> Row<'_> {
-        let index = &self.rows[sub];
-        let offset = index.offsets[i];
+    /// Row number `i` in file order.
+    #[inline]
+    fn row(&self, i: usize) -> Row<'_> {
+        let r = self.index[i];
+        let (at, sub) = (r.offset(), r.sub());
         let bytes = self.bytes.as_slice();
-        let at = offset as usize;
         let size = usize::from(u16::from_le_bytes([bytes[at], bytes[at + 1]]));
         let data = &bytes[at + MESSAGE_HEADER_LEN + 2..at + MESSAGE_HEADER_LEN + size];
         let subscription = &self.meta.subscriptions[sub];
-        let timestamp = match &index.timestamps {
-            Some(t) => t[i],
-            None => {
-                let at = subscription.timestamp.map_or(0, |(at, _)| at);
-                u64::from_le_bytes(data[at..at + 8].try_into().unwrap_or_default())
+        let timestamp = match subscription.timestamp {
+            Some((ts, Primitive::UInt64)) => {
+                u64::from_le_bytes(data[ts..ts + 8].try_into().expect("8 bytes"))
             }
+            _ => self
+                .other_timestamps
+                .binary_search_by_key(&i, |&(row, _)| row)
+                .map_or(0, |k| self.other_timestamps[k].1),
         };
         Row {
             timestamp,
-            offset,
+            offset: at as u64,
             data,
             subscription,
             schema: &self.meta.schema,
@@ -310,9 +342,7 @@ impl<'a> Log<'a> {
 #[derive(Debug, Clone)]
 pub struct Rows<'a> {
     log: &'a Log<'a>,
-    sub: usize,
-    next: usize,
-    end: usize,
+    rows: std::slice::Iter<'a, usize>,
 }
 
 impl<'a> Iterator for Rows<'a> {
@@ -320,15 +350,11 @@ impl<'a> Iterator for Rows<'a> {
 
     #[inline]
     fn next(&mut self) -> Option<Row<'a>> {
-        if self.next == self.end {
-            return None;
-        }
-        self.next += 1;
-        Some(self.log.row(self.sub, self.next - 1))
+        self.rows.next().map(|&i| self.log.row(i))
     }
 
     fn size_hint(&self) -> (usize, Option<usize>) {
-        (self.end - self.next, Some(self.end - self.next))
+        self.rows.size_hint()
     }
 }
 
@@ -336,20 +362,15 @@ impl ExactSizeIterator for Rows<'_> {}
 
 impl DoubleEndedIterator for Rows<'_> {
     fn next_back(&mut self) -> Option<Self::Item> {
-        if self.next == self.end {
-            return None;
-        }
-        self.end -= 1;
-        Some(self.log.row(self.sub, self.end))
+        self.rows.next_back().map(|&i| self.log.row(i))
     }
 }
 
-/// Every row of a log in file order ([`Log::data`]).
+/// Rows of a log in file order ([`Log::data`], [`Log::data_range`]).
 #[derive(Debug, Clone)]
 pub struct DataRows<'a> {
     log: &'a Log<'a>,
-    next: usize,
-    cursors: Vec<usize>,
+    range: std::ops::Range<usize>,
 }
 
 impl<'a> Iterator for DataRows<'a> {
@@ -357,17 +378,18 @@ impl<'a> Iterator for DataRows<'a> {
 
     #[inline]
     fn next(&mut self) -> Option<Row<'a>> {
-        let sub = *self.log.order.get(self.next)? as usize;
-        self.next += 1;
-        let i = self.cursors[sub];
-        self.cursors[sub] += 1;
-        Some(self.log.row(sub, i))
+        self.range.next().map(|i| self.log.row(i))
     }
 
     fn size_hint(&self) -> (usize, Option<usize>) {
-        let n = self.log.order.len() - self.next;
-        (n, Some(n))
+        self.range.size_hint()
     }
 }
 
 impl ExactSizeIterator for DataRows<'_> {}
+
+impl DoubleEndedIterator for DataRows<'_> {
+    fn next_back(&mut self) -> Option<Self::Item> {
+        self.range.next_back().map(|i| self.log.row(i))
+    }
+}

@@ -1,8 +1,6 @@
 //! What a log says besides its data rows: formats, info, parameters, subscriptions... and the
 //! interpreter ([`Metadata::apply`]) that turns each framed message into these records.
 
-use std::collections::HashMap;
-
 use super::message::{FileHeader, FlagBits, KNOWN_VERSION, KeyValue, Message};
 use crate::error::{Diagnostic, DiagnosticKind, ReadError};
 use crate::schema::{Field, Format, FormatId, Primitive, Schema, TypeRef};
@@ -76,6 +74,8 @@ pub struct ParameterChange {
     pub name: String,
     /// The new value.
     pub value: ParamValue,
+    /// File offset of the message.
+    pub offset: u64,
 }
 
 /// A `Q` message: a default value of a parameter.
@@ -162,6 +162,8 @@ pub struct LoggedMessage {
     pub timestamp: u64,
     /// The text (lossy UTF-8).
     pub text: String,
+    /// File offset of the message.
+    pub offset: u64,
 }
 
 impl LoggedMessage {
@@ -193,6 +195,7 @@ pub struct Subscription {
     pub name: String,
     /// File offset of the `A` message.
     pub offset: u64,
+    pub(crate) index: usize,
     pub(crate) format: Option<FormatId>,
     pub(crate) sizes: Option<(usize, usize)>,
     pub(crate) timestamp: Option<(usize, Primitive)>,
@@ -201,6 +204,11 @@ pub struct Subscription {
 }
 
 impl Subscription {
+    /// Position of this subscription in the log's subscription list.
+    pub fn index(&self) -> usize {
+        self.index
+    }
+
     /// The format of the rows, if the subscription names a valid one.
     pub fn format(&self) -> Option<FormatId> {
         self.format
@@ -254,6 +262,9 @@ impl Clock {
     }
 }
 
+/// Most subscriptions one log indexes.
+pub(crate) const MAX_SUBSCRIPTIONS: usize = 1 << 24;
+
 /// What one message changed, for the reader driving [`Metadata::apply`].
 #[derive(Debug)]
 pub(crate) enum Applied {
@@ -278,7 +289,8 @@ pub struct Metadata {
     pub(crate) initial_parameters: Vec<Parameter>,
     pub(crate) default_parameters: Vec<DefaultParameter>,
     pub(crate) subscriptions: Vec<Subscription>,
-    by_msg_id: HashMap<u16, usize>,
+    /// Subscription index + 1 per `msg_id` (0: none), a flat table for the per-row lookup.
+    by_msg_id: Vec<u32>,
     in_data_section: bool,
     last_timestamp: u64,
     dropouts_us: u64,
@@ -296,7 +308,7 @@ impl Metadata {
             initial_parameters: Vec::new(),
             default_parameters: Vec::new(),
             subscriptions: Vec::new(),
-            by_msg_id: HashMap::new(),
+            by_msg_id: vec![0; 1 << 16],
             in_data_section: false,
             last_timestamp: header.start_timestamp,
             dropouts_us: 0,
@@ -443,6 +455,7 @@ impl Metadata {
                         timestamp: self.last_timestamp,
                         name,
                         value,
+                        offset,
                     }));
                 }
                 match self.initial_parameters.iter_mut().find(|p| p.name == name) {
@@ -494,6 +507,7 @@ impl Metadata {
                     tag,
                     timestamp,
                     text: String::from_utf8_lossy(text).into_owned(),
+                    offset,
                 }))
             }
             Message::Sync => {
@@ -528,11 +542,15 @@ impl Metadata {
             Ok(n) => n.to_owned(),
             Err(_) => return diag(invalid_utf8("subscription name", name)),
         };
+        if self.subscriptions.len() >= MAX_SUBSCRIPTIONS {
+            return diag(DiagnosticKind::TooManySubscriptions { topic: name });
+        }
         let mut sub = Subscription {
             msg_id,
             multi_id,
             name,
             offset,
+            index: self.subscriptions.len(),
             format: None,
             sizes: None,
             timestamp: None,
@@ -575,7 +593,8 @@ impl Metadata {
                 }
             },
         }
-        if let Some(&previous) = self.by_msg_id.get(&msg_id) {
+        if let Some(previous) = self.by_msg_id[usize::from(msg_id)].checked_sub(1) {
+            let previous = previous as usize;
             problem.get_or_insert(DiagnosticKind::DuplicateMsgId {
                 msg_id,
                 previous: self.subscriptions[previous].name.clone(),
@@ -583,7 +602,7 @@ impl Metadata {
             });
         }
         let sizes = sub.sizes;
-        self.by_msg_id.insert(msg_id, self.subscriptions.len());
+        self.by_msg_id[usize::from(msg_id)] = self.subscriptions.len() as u32 + 1;
         self.subscriptions.push(sub);
         if let Some(kind) = problem {
             return diag(kind);
@@ -594,8 +613,32 @@ impl Metadata {
         })
     }
 
+    /// Fast path of [`Metadata::apply`] for a `D` message the framer found strongly plausible:
+    /// `(subscription, timestamp)` for the common case (plan built, `uint64_t` timestamp), with
+    /// the same effects as the general path; `None` changes nothing.
+    #[inline]
+    pub(crate) fn fast_row(&mut self, msg_id: u16, data: &[u8]) -> Option<(usize, u64)> {
+        let index = self.by_msg_id[usize::from(msg_id)].checked_sub(1)? as usize;
+        let sub = &self.subscriptions[index];
+        let (min, max) = sub.sizes?;
+        let (at, Primitive::UInt64) = sub.timestamp? else {
+            return None;
+        };
+        if sub.plan.is_none() || data.len() < min || data.len() > max {
+            return None;
+        }
+        let timestamp = u64::from_le_bytes(data.get(at..at + 8)?.try_into().ok()?);
+        if timestamp > self.last_timestamp {
+            self.last_timestamp = timestamp;
+        }
+        Some((index, timestamp))
+    }
+
     fn data(&mut self, offset: u64, msg_id: u16, data: &[u8]) -> Result<Applied, ReadError> {
-        let Some(&index) = self.by_msg_id.get(&msg_id) else {
+        let Some(index) = self.by_msg_id[usize::from(msg_id)]
+            .checked_sub(1)
+            .map(|i| i as usize)
+        else {
             return Ok(Applied::Diagnostic(Diagnostic {
                 offset,
                 kind: DiagnosticKind::UnknownMsgId { msg_id },

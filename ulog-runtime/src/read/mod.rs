@@ -93,6 +93,18 @@ impl Walker {
         }
     }
 
+    /// The next row if the fast path applies (whole file in `w`, from offset 0):
+    /// `(offset, subscription, timestamp)`.
+    #[inline]
+    fn fast_row(&mut self, w: &[u8]) -> Option<(usize, usize, u64)> {
+        let (offset, size) = self.framer.peek_data(w)?;
+        let payload = &w[offset + MESSAGE_HEADER_LEN..offset + MESSAGE_HEADER_LEN + size];
+        let msg_id = u16::from_le_bytes([payload[0], payload[1]]);
+        let (sub, timestamp) = self.meta.fast_row(msg_id, &payload[2..])?;
+        self.framer.commit(offset, size);
+        Some((offset, sub, timestamp))
+    }
+
     fn step<'w>(&mut self, w: &'w [u8], base: u64, eof: bool) -> Result<Step<'w>, ReadError> {
         let diag = |offset, kind| Step::Applied {
             offset,
