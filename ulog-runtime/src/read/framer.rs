@@ -160,6 +160,12 @@ impl Framer {
                     self.pos = end;
                     return Frame::BadAppendedOffset { offset: p };
                 }
+                if eof && !self.segments.is_empty() {
+                    // Segments that start beyond the end of the file.
+                    let offset = self.segments.remove(0);
+                    self.segment_end = self.segments.first().copied().unwrap_or(u64::MAX);
+                    return Frame::BadAppendedOffset { offset };
+                }
                 return Frame::End;
             }
             if p + MESSAGE_HEADER_LEN as u64 > end {
@@ -183,16 +189,21 @@ impl Framer {
             let Some(msg) = window(w, base, p, MESSAGE_HEADER_LEN + usize::from(size)) else {
                 return self.need_more(p);
             };
+            // A weak message needs a plausible next header; a message of an unknown type (a
+            // newer writer's, or garbage) needs a next message that is strongly plausible.
             let accepted = match self.plausibility(p, ty, &msg[MESSAGE_HEADER_LEN..]) {
                 Plausibility::Strong => true,
                 Plausibility::Invalid => false,
-                weak => match self.successor(w, base, avail, end, msg_end) {
+                Plausibility::Weak => match self.successor(w, base, avail, end, msg_end) {
                     None => return self.need_more(p),
-                    Some(next) => {
-                        next == Plausibility::Strong
-                            || (weak == Plausibility::Weak && next == Plausibility::Weak)
-                    }
+                    Some(next) => matches!(next, Plausibility::Strong | Plausibility::Weak),
                 },
+                Plausibility::Unknown => {
+                    match self.strong_successor(w, base, avail, end, msg_end) {
+                        None => return self.need_more(p),
+                        Some(strong) => strong,
+                    }
+                }
             };
             if !accepted {
                 self.fail(p, Some(size));
@@ -249,6 +260,29 @@ impl Framer {
         }
         let h = window(w, base, at, MESSAGE_HEADER_LEN)?;
         Some(header_plausibility(h))
+    }
+
+    /// Whether the message at `at` is strongly plausible as a whole (or the data ends exactly
+    /// there). `None`: bytes are missing.
+    fn strong_successor(&self, w: &[u8], base: u64, avail: u64, end: u64, at: u64) -> Option<bool> {
+        if at == end {
+            return Some(true);
+        }
+        if at + MESSAGE_HEADER_LEN as u64 > end {
+            return Some(false);
+        }
+        let h = window(w, base, at, MESSAGE_HEADER_LEN)
+            .or_else(|| (avail >= end).then_some(&[][..]))?;
+        if h.is_empty() {
+            return Some(false);
+        }
+        let size = u16_at(h, 0);
+        let next_end = at + MESSAGE_HEADER_LEN as u64 + u64::from(size);
+        if next_end > end {
+            return Some(false);
+        }
+        let msg = window(w, base, at, MESSAGE_HEADER_LEN + usize::from(size))?;
+        Some(self.plausibility(at, h[2], &msg[MESSAGE_HEADER_LEN..]) == Plausibility::Strong)
     }
 
     fn plausibility(&self, offset: u64, ty: u8, p: &[u8]) -> Plausibility {

@@ -348,6 +348,135 @@ impl<'a> Message<'a> {
     }
 }
 
+/// A message part too large for the length field that holds its size.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error("`{}` message: {what} of {size} bytes exceeds the {limit} its length field can hold", *.ty as char)]
+pub struct MessageTooLarge {
+    /// The type byte.
+    pub ty: u8,
+    /// `"payload"` or `"key"`.
+    pub what: &'static str,
+    /// The size it would need.
+    pub size: usize,
+    /// The largest size possible.
+    pub limit: usize,
+}
+
+impl Message<'_> {
+    /// The type byte this message is written with.
+    pub fn type_byte(&self) -> u8 {
+        match self {
+            Message::FlagBits(_) => b'B',
+            Message::Format(_) => b'F',
+            Message::Info(_) => b'I',
+            Message::MultiInfo { .. } => b'M',
+            Message::Parameter(_) => b'P',
+            Message::DefaultParameter { .. } => b'Q',
+            Message::Subscribe { .. } => b'A',
+            Message::Unsubscribe { .. } => b'R',
+            Message::Data { .. } => b'D',
+            Message::Logging { tag: None, .. } => b'L',
+            Message::Logging { tag: Some(_), .. } => b'C',
+            Message::Sync => b'S',
+            Message::Dropout { .. } => b'O',
+            Message::Unknown { ty, .. } => *ty,
+        }
+    }
+
+    /// Appends the message (3-byte header and payload) to `out`, laid out as the
+    /// specification says; the inverse of [`Message::parse`]. On error `out` is unchanged.
+    ///
+    /// ```
+    /// use ulog_runtime::read::Message;
+    /// let mut out = Vec::new();
+    /// Message::Dropout { duration_ms: 119 }.encode(&mut out).unwrap();
+    /// assert_eq!(out, [2, 0, b'O', 119, 0]);
+    /// assert_eq!(Message::parse(out[2], &out[3..]).unwrap(), Message::Dropout { duration_ms: 119 });
+    /// ```
+    pub fn encode(&self, out: &mut Vec<u8>) -> Result<(), MessageTooLarge> {
+        let ty = self.type_byte();
+        if let Message::Info(e)
+        | Message::Parameter(e)
+        | Message::MultiInfo { entry: e, .. }
+        | Message::DefaultParameter { entry: e, .. } = self
+        {
+            if e.key.len() > usize::from(u8::MAX) {
+                return Err(MessageTooLarge {
+                    ty,
+                    what: "key",
+                    size: e.key.len(),
+                    limit: 255,
+                });
+            }
+        }
+        let start = out.len();
+        out.extend_from_slice(&[0, 0, ty]);
+        let kv = |out: &mut Vec<u8>, e: &KeyValue<'_>| {
+            out.push(e.key.len() as u8);
+            out.extend_from_slice(e.key);
+            out.extend_from_slice(e.value);
+        };
+        match self {
+            Message::FlagBits(bits) => out.extend_from_slice(&bits.to_bytes()),
+            Message::Format(text) => out.extend_from_slice(text),
+            Message::Info(e) | Message::Parameter(e) => kv(out, e),
+            Message::MultiInfo { continued, entry } => {
+                out.push(u8::from(*continued));
+                kv(out, entry);
+            }
+            Message::DefaultParameter {
+                default_types,
+                entry,
+            } => {
+                out.push(*default_types);
+                kv(out, entry);
+            }
+            Message::Subscribe {
+                multi_id,
+                msg_id,
+                name,
+            } => {
+                out.push(*multi_id);
+                out.extend_from_slice(&msg_id.to_le_bytes());
+                out.extend_from_slice(name);
+            }
+            Message::Unsubscribe { msg_id } => out.extend_from_slice(&msg_id.to_le_bytes()),
+            Message::Data { msg_id, data } => {
+                out.extend_from_slice(&msg_id.to_le_bytes());
+                out.extend_from_slice(data);
+            }
+            Message::Logging {
+                level,
+                tag,
+                timestamp,
+                text,
+            } => {
+                out.push(*level);
+                if let Some(tag) = tag {
+                    out.extend_from_slice(&tag.to_le_bytes());
+                }
+                out.extend_from_slice(&timestamp.to_le_bytes());
+                out.extend_from_slice(text);
+            }
+            Message::Sync => out.extend_from_slice(&SYNC_MAGIC),
+            Message::Dropout { duration_ms } => out.extend_from_slice(&duration_ms.to_le_bytes()),
+            Message::Unknown { payload, .. } => out.extend_from_slice(payload),
+        }
+        let size = out.len() - start - MESSAGE_HEADER_LEN;
+        let Ok(size16) = u16::try_from(size) else {
+            out.truncate(start);
+            return Err(MessageTooLarge {
+                ty,
+                what: "payload",
+                size,
+                limit: usize::from(u16::MAX),
+            });
+        };
+        out[start..start + 2].copy_from_slice(&size16.to_le_bytes());
+        Ok(())
+    }
+}
+
 pub(crate) fn u16_at(b: &[u8], at: usize) -> u16 {
     u16::from_le_bytes([b[at], b[at + 1]])
 }
@@ -450,6 +579,94 @@ mod tests {
             e.to_string(),
             "malformed `I` message: key length runs past the end of the message"
         );
+    }
+
+    #[test]
+    fn encode_is_the_inverse_of_parse() {
+        let bits = FlagBits {
+            compat: [1, 0, 0, 0, 0, 0, 0, 0],
+            incompat: [0; 8],
+            appended_offsets: [9, 0, 0],
+        };
+        let kv = KeyValue {
+            key: b"int32_t P",
+            value: &[1, 2, 3, 4],
+        };
+        let messages = [
+            Message::FlagBits(bits),
+            Message::Format(b"a:uint8_t x;"),
+            Message::Info(kv),
+            Message::MultiInfo {
+                continued: true,
+                entry: kv,
+            },
+            Message::Parameter(kv),
+            Message::DefaultParameter {
+                default_types: 2,
+                entry: kv,
+            },
+            Message::Subscribe {
+                multi_id: 1,
+                msg_id: 300,
+                name: b"a",
+            },
+            Message::Unsubscribe { msg_id: 300 },
+            Message::Data {
+                msg_id: 300,
+                data: &[7],
+            },
+            Message::Logging {
+                level: b'4',
+                tag: None,
+                timestamp: 5,
+                text: b"w",
+            },
+            Message::Logging {
+                level: b'4',
+                tag: Some(9),
+                timestamp: 5,
+                text: b"w",
+            },
+            Message::Sync,
+            Message::Dropout { duration_ms: 3 },
+            Message::Unknown {
+                ty: b'z',
+                payload: &[1, 2],
+            },
+        ];
+        for m in messages {
+            let mut out = vec![0xAA];
+            m.encode(&mut out).unwrap();
+            let size = usize::from(u16_at(&out, 1));
+            assert_eq!(size + 4, out.len(), "{m:?}");
+            assert_eq!(Message::parse(out[3], &out[4..]).unwrap(), m);
+        }
+        // The spec's layout of a subscription: size, 'A', multi_id, msg_id, name.
+        let mut out = Vec::new();
+        Message::Subscribe {
+            multi_id: 1,
+            msg_id: 0x0203,
+            name: b"ab",
+        }
+        .encode(&mut out)
+        .unwrap();
+        assert_eq!(out, [5, 0, b'A', 1, 3, 2, b'a', b'b']);
+        let big = vec![0; 70_000];
+        let mut out = vec![1];
+        let e = Message::Format(&big).encode(&mut out).unwrap_err();
+        assert_eq!((e.size, out.len()), (70_000, 1));
+        assert_eq!(
+            e.to_string(),
+            "`F` message: payload of 70000 bytes exceeds the 65535 its length field can hold"
+        );
+        let long_key = vec![b'k'; 256];
+        let e = Message::Info(KeyValue {
+            key: &long_key,
+            value: &[],
+        })
+        .encode(&mut out)
+        .unwrap_err();
+        assert_eq!((e.what, out.len()), ("key", 1));
     }
 
     #[test]

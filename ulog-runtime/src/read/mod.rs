@@ -11,7 +11,7 @@ mod stream;
 pub use log::{DataRows, Log, Rows};
 pub use message::{
     FLAG_BITS_LEN, FileHeader, FlagBits, HEADER_LEN, KNOWN_VERSION, KeyValue, MAGIC,
-    MESSAGE_HEADER_LEN, MalformedMessage, Message, MessageType, SYNC_MAGIC,
+    MESSAGE_HEADER_LEN, MalformedMessage, Message, MessageTooLarge, MessageType, SYNC_MAGIC,
 };
 pub use metadata::{
     DefaultParameter, Dropout, Info, LogLevel, LoggedMessage, Metadata, MultiInfo, ParamValue,
@@ -154,3 +154,6 @@ impl Walker {
         })
     }
 }
+
+#[cfg(test)]
+mod tests;
