@@ -4,7 +4,11 @@
 //! relative to the workspace root), searched recursively for `.ulg` files. Under CI
 //! (`CI=true`) a missing corpus fails the tests instead of skipping them.
 
+use std::ops::Range;
 use std::path::{Path, PathBuf};
+
+use ulog_runtime::read::SYNC_MAGIC;
+use ulog_runtime::{DiagnosticKind, Log};
 
 /// The corpus folder.
 pub fn corpus_dir() -> PathBuf {
@@ -70,4 +74,24 @@ pub fn short_name(path: &Path) -> String {
         Some(p) => format!("{p}/{file}"),
         None => file,
     }
+}
+
+/// The byte ranges of a log that pyulog does not read: after damage, pyulog resumes only
+/// after the next sync magic (or never, without one), where this reader resumes at the first
+/// intact message. Each range runs from a damage this reader reported to the end of the first
+/// sync magic after it (or the end of the file).
+pub fn pyulog_blind_ranges(log: &Log<'_>) -> Vec<Range<u64>> {
+    let bytes = log.bytes();
+    log.diagnostics()
+        .iter()
+        .filter(|d| matches!(d.kind, DiagnosticKind::Skipped { .. } | DiagnosticKind::Overlap { .. }))
+        .map(|d| {
+            let from = d.offset as usize;
+            let end = bytes[from + 1..]
+                .windows(SYNC_MAGIC.len())
+                .position(|w| w == SYNC_MAGIC)
+                .map_or(bytes.len(), |i| from + 1 + i + SYNC_MAGIC.len());
+            d.offset..end as u64
+        })
+        .collect()
 }

@@ -12,15 +12,14 @@
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::ops::Range;
 use std::path::Path;
 
 use serde_json::Value as Json;
 use sha2::{Digest, Sha256};
-use ulog_runtime::read::{ParamValue, SYNC_MAGIC};
+use ulog_runtime::read::ParamValue;
 use ulog_runtime::schema::Primitive;
 use ulog_runtime::{DiagnosticKind, Log, Row, Scalar, Value};
-use ulog_tests::{corpus_files, oracle, short_name};
+use ulog_tests::{corpus_files, oracle, pyulog_blind_ranges, short_name};
 
 /// Collects every difference of one file instead of stopping at the first.
 #[derive(Default)]
@@ -91,29 +90,6 @@ fn param_matches(json: &Json, v: ParamValue) -> bool {
         ParamValue::Int32(i) => json.as_i64() == Some(i64::from(i)),
         ParamValue::Float(f) => scalar_matches(json, Scalar::Float(f)),
     }
-}
-
-/// The byte ranges pyulog does not read: from each damage this reader reported to the end of
-/// the first sync magic after it (or the end of the file).
-fn pyulog_blind_ranges(log: &Log<'_>) -> Vec<Range<u64>> {
-    let bytes = log.bytes();
-    log.diagnostics()
-        .iter()
-        .filter(|d| {
-            matches!(
-                d.kind,
-                DiagnosticKind::Skipped { .. } | DiagnosticKind::Overlap { .. }
-            )
-        })
-        .map(|d| {
-            let from = d.offset as usize;
-            let end = bytes[from + 1..]
-                .windows(SYNC_MAGIC.len())
-                .position(|w| w == SYNC_MAGIC)
-                .map_or(bytes.len(), |i| from + 1 + i + SYNC_MAGIC.len());
-            d.offset..end as u64
-        })
-        .collect()
 }
 
 fn check_file(path: &Path, o: &Json) -> Vec<String> {
