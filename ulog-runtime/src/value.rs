@@ -337,6 +337,11 @@ impl RowPlan {
     /// The plan for a format of `schema` (resolving its layout if needed).
     pub fn new(schema: &mut Schema, root: FormatId) -> Result<RowPlan, PlanError> {
         RowPlan::check(schema, root)?;
+        Ok(RowPlan::from_checked(schema, root))
+    }
+
+    /// The plan of a format [`RowPlan::check`] accepted (its layouts are resolved).
+    pub(crate) fn from_checked(schema: &Schema, root: FormatId) -> RowPlan {
         let mut runs: Vec<LeafRun> = Vec::new();
         let mut leaves = 0;
         walk_leaves(schema, root, 0, &mut |offset, primitive, count| {
@@ -354,7 +359,7 @@ impl RowPlan {
                 primitive,
             });
         });
-        Ok(RowPlan { root, runs, leaves })
+        RowPlan { root, runs, leaves }
     }
 
     /// Checks that a format can be decoded dynamically (it has a layout, not nested too

@@ -199,7 +199,8 @@ pub struct Subscription {
     pub(crate) format: Option<FormatId>,
     pub(crate) sizes: Option<(usize, usize)>,
     pub(crate) timestamp: Option<(usize, Primitive)>,
-    pub(crate) plan: Option<RowPlan>,
+    /// Built at the first decoded row, so plan memory is bounded by the data decoded.
+    pub(crate) plan: std::sync::OnceLock<RowPlan>,
     clock: Clock,
 }
 
@@ -217,6 +218,13 @@ impl Subscription {
     /// Accepted row lengths: without trailing padding up to the full size.
     pub fn payload_sizes(&self) -> Option<(usize, usize)> {
         self.sizes
+    }
+
+    /// The dynamic decoding plan of the rows (`schema` is the log's).
+    pub fn plan(&self, schema: &Schema) -> Option<&RowPlan> {
+        let id = self.format?;
+        // `format` is set only for formats `RowPlan::check` accepted.
+        Some(self.plan.get_or_init(|| RowPlan::from_checked(schema, id)))
     }
 
     /// Type of the `timestamp` field, if there is one.
@@ -554,7 +562,7 @@ impl Metadata {
             format: None,
             sizes: None,
             timestamp: None,
-            plan: None,
+            plan: std::sync::OnceLock::new(),
             clock: Clock::default(),
         };
         let mut problem = None;
@@ -614,7 +622,7 @@ impl Metadata {
     }
 
     /// Fast path of [`Metadata::apply`] for a `D` message the framer found strongly plausible:
-    /// `(subscription, timestamp)` for the common case (plan built, `uint64_t` timestamp), with
+    /// `(subscription, timestamp)` for the common case (`uint64_t` timestamp), with
     /// the same effects as the general path; `None` changes nothing.
     #[inline]
     pub(crate) fn fast_row(&mut self, msg_id: u16, data: &[u8]) -> Option<(usize, u64)> {
@@ -624,7 +632,7 @@ impl Metadata {
         let (at, Primitive::UInt64) = sub.timestamp? else {
             return None;
         };
-        if sub.plan.is_none() || data.len() < min || data.len() > max {
+        if data.len() < min || data.len() > max {
             return None;
         }
         let timestamp = u64::from_le_bytes(data.get(at..at + 8)?.try_into().ok()?);
@@ -661,12 +669,6 @@ impl Metadata {
                     max,
                 },
             }));
-        }
-        if sub.plan.is_none() {
-            // Built at the first row, so that plan memory is bounded by the data read.
-            if let Some(id) = sub.format {
-                sub.plan = RowPlan::new(&mut self.schema, id).ok();
-            }
         }
         let timestamp = match sub.timestamp {
             None => 0,

@@ -57,7 +57,7 @@ impl<'a> Row<'a> {
 
     /// The dynamic decoding plan of this row's subscription.
     pub fn plan(&self) -> Option<&'a RowPlan> {
-        self.subscription.plan.as_ref()
+        self.subscription.plan(self.schema)
     }
 
     /// The schema the row's format belongs to.
