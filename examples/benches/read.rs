@@ -15,17 +15,24 @@
 use std::hint::black_box;
 use std::sync::OnceLock;
 
-use divan::counter::BytesCount;
 use divan::Bencher;
+use divan::counter::BytesCount;
 use ulog_runtime::Log;
 
 fn big() -> &'static [u8] {
     static BIG: OnceLock<Vec<u8>> = OnceLock::new();
     BIG.get_or_init(|| {
-        let corpus = std::env::var("ULOG_CORPUS").unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/testdata/ulog").to_owned());
-        let source = std::env::var("ULOG_BENCH_SOURCE").unwrap_or_else(|_| format!("{corpus}/px4-ulog-rs/quadrotor_local.ulg"));
-        let mb: usize = std::env::var("ULOG_BENCH_MB").ok().and_then(|s| s.parse().ok()).unwrap_or(400);
-        let bytes = std::fs::read(&source).unwrap_or_else(|e| panic!("{source}: {e} (set ULOG_BENCH_SOURCE)"));
+        let corpus = std::env::var("ULOG_CORPUS").unwrap_or_else(|_| {
+            concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/testdata/ulog").to_owned()
+        });
+        let source = std::env::var("ULOG_BENCH_SOURCE")
+            .unwrap_or_else(|_| format!("{corpus}/px4-ulog-rs/quadrotor_local.ulg"));
+        let mb: usize = std::env::var("ULOG_BENCH_MB")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(400);
+        let bytes = std::fs::read(&source)
+            .unwrap_or_else(|e| panic!("{source}: {e} (set ULOG_BENCH_SOURCE)"));
         let big = examples::inflate(&bytes, mb * 1_000_000).expect("a clean source log");
         eprintln!("benchmark log: {} bytes from {source}", big.len());
         big
@@ -62,7 +69,8 @@ fn baseline_header_walk(b: Bencher) {
 #[divan::bench(sample_count = 10, sample_size = 1)]
 fn walk(b: Bencher) {
     let data = big();
-    b.counter(BytesCount::new(data.len())).bench_local(|| black_box(Log::from_slice(black_box(data)).unwrap().row_count()));
+    b.counter(BytesCount::new(data.len()))
+        .bench_local(|| black_box(Log::from_slice(black_box(data)).unwrap().row_count()));
 }
 
 #[divan::bench(sample_count = 10, sample_size = 1)]
@@ -77,5 +85,6 @@ fn decode_leaves(b: Bencher) {
 #[divan::bench(sample_count = 10, sample_size = 1)]
 fn stream_leaves(b: Bencher) {
     let data = big();
-    b.counter(BytesCount::new(data.len())).bench_local(|| black_box(examples::Scan::stream(black_box(data)).unwrap().all));
+    b.counter(BytesCount::new(data.len()))
+        .bench_local(|| black_box(examples::Scan::stream(black_box(data)).unwrap().all));
 }

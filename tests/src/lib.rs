@@ -84,7 +84,12 @@ pub fn pyulog_blind_ranges(log: &Log<'_>) -> Vec<Range<u64>> {
     let bytes = log.bytes();
     log.diagnostics()
         .iter()
-        .filter(|d| matches!(d.kind, DiagnosticKind::Skipped { .. } | DiagnosticKind::Overlap { .. }))
+        .filter(|d| {
+            matches!(
+                d.kind,
+                DiagnosticKind::Skipped { .. } | DiagnosticKind::Overlap { .. }
+            )
+        })
         .map(|d| {
             let from = d.offset as usize;
             let end = bytes[from + 1..]

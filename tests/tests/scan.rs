@@ -18,9 +18,19 @@ use ulog_tests::{corpus_files, pyulog_blind_ranges, short_name, under_ci};
 
 fn live_reference(files: &[std::path::PathBuf]) -> Option<Vec<Json>> {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("py/scan_reference.py");
-    let out = Command::new("python3").arg(script).args(files).output().ok()?;
+    let out = Command::new("python3")
+        .arg(script)
+        .args(files)
+        .output()
+        .ok()?;
     if !out.status.success() {
-        eprintln!("scan_reference.py failed: {}", String::from_utf8_lossy(&out.stderr).lines().last().unwrap_or(""));
+        eprintln!(
+            "scan_reference.py failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+                .lines()
+                .last()
+                .unwrap_or("")
+        );
         return None;
     }
     let text = String::from_utf8(out.stdout).ok()?;
@@ -46,20 +56,36 @@ fn scan_figures_equal_pyulogs() {
         return;
     }
     let live = live_reference(&files);
-    assert!(live.is_some() || !under_ci(), "under CI pyulog must be installed (.ci/run does it)");
+    assert!(
+        live.is_some() || !under_ci(),
+        "under CI pyulog must be installed (.ci/run does it)"
+    );
     let committed = committed_reference();
-    eprintln!("pyulog figures: {}", if live.is_some() { "computed live" } else { "committed reference" });
+    eprintln!(
+        "pyulog figures: {}",
+        if live.is_some() {
+            "computed live"
+        } else {
+            "committed reference"
+        }
+    );
     let mut failures = Vec::new();
     let mut compared = 0;
     for (i, path) in files.iter().enumerate() {
         let bytes = std::fs::read(path).unwrap();
-        let sha: String = Sha256::digest(&bytes).iter().map(|b| format!("{b:02x}")).collect();
+        let sha: String = Sha256::digest(&bytes)
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect();
         let reference = match &live {
             Some(all) => &all[i],
             None => match committed.get(&sha) {
                 Some(r) => r,
                 None => {
-                    eprintln!("note: {}: no committed pyulog figures; install pyulog to check it", short_name(path));
+                    eprintln!(
+                        "note: {}: no committed pyulog figures; install pyulog to check it",
+                        short_name(path)
+                    );
                     continue;
                 }
             },
@@ -67,23 +93,46 @@ fn scan_figures_equal_pyulogs() {
         compared += 1;
         let log = Log::from_slice(&bytes).unwrap();
         let scan = Scan::log(&log);
-        assert_eq!(Scan::stream(&bytes[..]).unwrap(), scan, "{}: mmap and stream scans differ", short_name(path));
+        assert_eq!(
+            Scan::stream(&bytes[..]).unwrap(),
+            scan,
+            "{}: mmap and stream scans differ",
+            short_name(path)
+        );
 
         // Our figures over the rows pyulog reads.
         let blind = pyulog_blind_ranges(&log);
         let mut ours = Totals::default();
         let mut topics: HashMap<(String, u64), Totals> = HashMap::new();
-        for row in log.data().filter(|r| !blind.iter().any(|b| b.contains(&r.offset))) {
+        for row in log
+            .data()
+            .filter(|r| !blind.iter().any(|b| b.contains(&r.offset)))
+        {
             ours.add(&row);
-            topics.entry((row.subscription.name.clone(), u64::from(row.subscription.multi_id))).or_default().add(&row);
+            topics
+                .entry((
+                    row.subscription.name.clone(),
+                    u64::from(row.subscription.multi_id),
+                ))
+                .or_default()
+                .add(&row);
         }
         if blind.is_empty() {
             // Nothing set aside: these are the example's own figures (summed in another order).
             assert_eq!((ours.rows, ours.leaves), (scan.all.rows, scan.all.leaves));
-            assert!(close(ours.sum, scan.all.sum), "{} vs {}", ours.sum, scan.all.sum);
+            assert!(
+                close(ours.sum, scan.all.sum),
+                "{} vs {}",
+                ours.sum,
+                scan.all.sum
+            );
         }
         let name = short_name(path);
-        let (msgs, leaves, sum) = (reference["msgs"].as_u64().unwrap(), reference["leaves"].as_u64().unwrap(), reference["sum"].as_f64().unwrap());
+        let (msgs, leaves, sum) = (
+            reference["msgs"].as_u64().unwrap(),
+            reference["leaves"].as_u64().unwrap(),
+            reference["sum"].as_f64().unwrap(),
+        );
         if (ours.rows, ours.leaves) != (msgs, leaves) || !close(ours.sum, sum) {
             failures.push(format!("{name}: ours msgs={} leaves={} sum={:e}, pyulog msgs={msgs} leaves={leaves} sum={sum:e}", ours.rows, ours.leaves, ours.sum));
         }
@@ -92,10 +141,16 @@ fn scan_figures_equal_pyulogs() {
             let (rows, sum) = (t[2].as_u64().unwrap(), t[3].as_f64().unwrap());
             match topics.get(&key) {
                 Some(x) if x.rows == rows && close(x.sum, sum) => {}
-                other => failures.push(format!("{name}: {key:?}: ours {other:?}, pyulog rows={rows} sum={sum:e}")),
+                other => failures.push(format!(
+                    "{name}: {key:?}: ours {other:?}, pyulog rows={rows} sum={sum:e}"
+                )),
             }
         }
-        assert_eq!(topics.len(), reference["topics"].as_array().unwrap().len(), "{name}: topics with rows");
+        assert_eq!(
+            topics.len(),
+            reference["topics"].as_array().unwrap().len(),
+            "{name}: topics with rows"
+        );
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
     eprintln!("{compared} files: scan figures equal pyulog's");

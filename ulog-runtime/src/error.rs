@@ -156,12 +156,6 @@ pub enum DiagnosticKind {
         /// Why.
         error: PlanError,
     },
-    /// More subscriptions than a reader indexes (2^24); this one is ignored.
-    #[error("more than 16777216 subscriptions; `{topic}` ignored")]
-    TooManySubscriptions {
-        /// The topic.
-        topic: String,
-    },
     /// A subscription reuses a `msg_id`; later data goes to the new one.
     #[error("msg_id {msg_id} subscribed again (was `{previous}`), now `{topic}`")]
     DuplicateMsgId {

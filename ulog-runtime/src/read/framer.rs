@@ -66,6 +66,7 @@ const UNSUBSCRIBED: SizeRange = SizeRange {
     max: 0,
 };
 
+#[derive(Clone)]
 pub(crate) struct Framer {
     pos: u64,
     prev: Option<u64>,
@@ -91,12 +92,16 @@ impl Framer {
         }
     }
 
-    /// Declares `msg_id` subscribed with data payloads of `min..=max` bytes.
-    pub(crate) fn subscribe(&mut self, msg_id: u16, min: usize, max: usize) {
+    /// Declares `msg_id` subscribed with data payloads of `min..=max` bytes, or (`None`) with
+    /// rows that cannot be decoded.
+    pub(crate) fn subscribe(&mut self, msg_id: u16, sizes: Option<(usize, usize)>) {
         let to_size = |n: usize| u16::try_from(n + 2).unwrap_or(u16::MAX);
-        self.d_sizes[usize::from(msg_id)] = SizeRange {
-            min: to_size(min),
-            max: to_size(max),
+        self.d_sizes[usize::from(msg_id)] = match sizes {
+            Some((min, max)) => SizeRange {
+                min: to_size(min),
+                max: to_size(max),
+            },
+            None => UNSUBSCRIBED,
         };
     }
 
@@ -121,6 +126,62 @@ impl Framer {
             && end as u64 <= self.segment_end
             && end <= file.len())
         .then_some((p, usize::from(size)))
+    }
+
+    /// The start of the next message.
+    pub(crate) fn pos(&self) -> u64 {
+        self.pos
+    }
+
+    /// The start of the last message accepted.
+    pub(crate) fn prev(&self) -> Option<u64> {
+        self.prev
+    }
+
+    /// Whether the framer is mid-recovery or has notices to report.
+    pub(crate) fn is_busy(&self) -> bool {
+        self.resync.is_some() || !self.notices.is_empty()
+    }
+
+    /// Whether the file has appended data segments still ahead.
+    pub(crate) fn has_segments(&self) -> bool {
+        !self.segments.is_empty() || self.segment_end != u64::MAX
+    }
+
+    /// Continues from `pos` as if the message at `prev` had just been accepted.
+    pub(crate) fn resume_at(&mut self, pos: u64, prev: Option<u64>) {
+        self.pos = pos;
+        self.prev = prev;
+        self.floor = self.floor.max(prev.map_or(pos, |p| p + 1));
+        self.resync = None;
+    }
+
+    /// The first offset in `from..from + max_scan` where `chain` consecutive strongly
+    /// plausible messages start (whole file in `file`): a message boundary beyond doubt.
+    pub(crate) fn find_boundary(
+        &self,
+        file: &[u8],
+        from: usize,
+        max_scan: usize,
+        chain: usize,
+    ) -> Option<usize> {
+        let end = file
+            .len()
+            .min(usize::try_from(self.segment_end).unwrap_or(usize::MAX));
+        (from..end.min(from.saturating_add(max_scan))).find(|&q| {
+            let mut at = q;
+            (0..chain).all(|_| {
+                let Some(h) = file.get(at..at + MESSAGE_HEADER_LEN) else {
+                    return false;
+                };
+                let next = at + MESSAGE_HEADER_LEN + usize::from(u16_at(h, 0));
+                let strong = next <= end
+                    && self.plausibility(at as u64, h[2], &file[at + MESSAGE_HEADER_LEN..next])
+                        == Plausibility::Strong;
+                at = next;
+                strong
+            })
+        })
     }
 
     /// Accepts the message found by [`Framer::peek_data`].

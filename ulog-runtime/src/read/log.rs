@@ -28,27 +28,82 @@ impl Bytes<'_> {
     }
 }
 
-/// One data row in the file-order index: the message offset in the high 40 bits, the
-/// subscription index in the low 24.
-#[derive(Debug, Clone, Copy)]
-struct RowRef(u64);
+/// File offsets of the data rows, in file order, 4 bytes a row: chunks of offsets relative to
+/// a base, a new chunk where the distance no longer fits (and one per part read in parallel,
+/// moved in rather than copied).
+#[derive(Debug, Default)]
+struct RowIndex {
+    chunks: Vec<Chunk>,
+    /// Capacity for the first chunk.
+    reserve: usize,
+}
 
-const SUB_BITS: u32 = 24;
-/// Largest file the row index can address (1 TiB).
-const MAX_FILE_LEN: u64 = 1 << (64 - SUB_BITS);
+#[derive(Debug)]
+struct Chunk {
+    base: u64,
+    /// Row number of `offsets[0]`.
+    first: usize,
+    offsets: Vec<u32>,
+}
 
-impl RowRef {
-    #[inline]
-    fn new(offset: usize, sub: usize) -> RowRef {
-        RowRef(((offset as u64) << SUB_BITS) | sub as u64)
+impl Chunk {
+    fn end(&self) -> usize {
+        self.first + self.offsets.len()
     }
-    #[inline]
-    fn offset(self) -> usize {
-        (self.0 >> SUB_BITS) as usize
+}
+
+impl RowIndex {
+    fn with_capacity(reserve: usize) -> RowIndex {
+        RowIndex {
+            chunks: Vec::new(),
+            reserve,
+        }
     }
+
+    fn len(&self) -> usize {
+        self.chunks.last().map_or(0, Chunk::end)
+    }
+
     #[inline]
-    fn sub(self) -> usize {
-        (self.0 & ((1 << SUB_BITS) - 1)) as usize
+    fn push(&mut self, offset: u64) {
+        if let Some(c) = self.chunks.last_mut() {
+            if let Ok(rel) = u32::try_from(offset - c.base) {
+                c.offsets.push(rel);
+                return;
+            }
+        }
+        self.new_chunk(offset);
+    }
+
+    #[cold]
+    fn new_chunk(&mut self, offset: u64) {
+        let mut offsets = Vec::with_capacity(std::mem::take(&mut self.reserve).max(1024));
+        offsets.push(0);
+        self.chunks.push(Chunk {
+            base: offset,
+            first: self.len(),
+            offsets,
+        });
+    }
+
+    fn append(&mut self, other: RowIndex) {
+        for mut c in other.chunks {
+            c.first = self.len();
+            self.chunks.push(c);
+        }
+    }
+
+    /// Offset of row `i`, and the chunk it is in.
+    fn get(&self, i: usize) -> (u64, usize) {
+        let k = self.chunks.partition_point(|c| c.end() <= i);
+        let c = &self.chunks[k];
+        (c.base + u64::from(c.offsets[i - c.first]), k)
+    }
+
+    fn shrink_to_fit(&mut self) {
+        self.chunks
+            .iter_mut()
+            .for_each(|c| c.offsets.shrink_to_fit());
     }
 }
 
@@ -74,7 +129,7 @@ pub struct Log<'a> {
     bytes: Bytes<'a>,
     meta: Metadata,
     /// Every row, in file order.
-    index: Vec<RowRef>,
+    index: RowIndex,
     /// Unwrapped timestamps of rows whose `timestamp` is not `uint64_t`, by row number.
     other_timestamps: Vec<(usize, u64)>,
     /// Row numbers per subscription, built at the first per-subscription access.
@@ -84,6 +139,118 @@ pub struct Log<'a> {
     dropouts: Vec<Dropout>,
     sync_offsets: Vec<u64>,
     diagnostics: Vec<Diagnostic>,
+}
+
+/// What walking (part of) a file collects besides the metadata.
+#[derive(Default)]
+struct Collected {
+    index: RowIndex,
+    other_timestamps: Vec<(usize, u64)>,
+    logged: Vec<LoggedMessage>,
+    changes: Vec<ParameterChange>,
+    dropouts: Vec<Dropout>,
+    sync_offsets: Vec<u64>,
+    diagnostics: Vec<Diagnostic>,
+    /// Latest row timestamp (worker parts).
+    max_timestamp: u64,
+}
+
+/// How far a walk went.
+enum Walked {
+    /// Reached the limit (the next message starts at or after it).
+    Limit,
+    /// The file ended.
+    End,
+    /// A worker stopped before a message it leaves to the sequential walk.
+    Stopped,
+}
+
+/// Below this many bytes of data a file is read on one thread.
+const PARALLEL_MIN_LEN: usize = 8 << 20;
+
+impl Collected {
+    /// Walks from the walker's position until the next message starts at or after `limit`.
+    /// A worker (`worker`) takes only rows, sync, logged strings, dropouts and parameter
+    /// changes, and stops before anything else, which the sequential walk then reads.
+    fn walk(
+        &mut self,
+        walker: &mut Walker,
+        data: &[u8],
+        limit: u64,
+        worker: bool,
+    ) -> Result<Walked, ReadError> {
+        loop {
+            let (pos, prev) = (walker.framer.pos(), walker.framer.prev());
+            if pos >= limit {
+                return Ok(Walked::Limit);
+            }
+            if let Some((offset, _, timestamp)) = walker.fast_row(data) {
+                self.index.push(offset as u64);
+                self.max_timestamp = self.max_timestamp.max(timestamp);
+                continue;
+            }
+            if worker {
+                let plain = !walker.framer.is_busy()
+                    && data
+                        .get(pos as usize + 2)
+                        .is_some_and(|t| matches!(t, b'S' | b'L' | b'C' | b'O' | b'P'));
+                if !plain {
+                    return Ok(Walked::Stopped);
+                }
+            }
+            match walker.step(data, 0, true)? {
+                Step::Applied {
+                    offset, applied, ..
+                } => match applied {
+                    Applied::Sync => self.sync_offsets.push(offset),
+                    Applied::Logged(m) => self.logged.push(m),
+                    Applied::Dropout(d) => self.dropouts.push(d),
+                    Applied::ParameterChange(c) => self.changes.push(c),
+                    _ if worker => {
+                        walker.framer.resume_at(pos, prev);
+                        return Ok(Walked::Stopped);
+                    }
+                    Applied::Nothing => {}
+                    Applied::Subscribed { diagnostic, .. } => self.diagnostics.extend(diagnostic),
+                    Applied::Row { sub, timestamp } => {
+                        if walker.meta.subscriptions[sub].timestamp_type()
+                            != Some(Primitive::UInt64)
+                        {
+                            self.other_timestamps.push((self.index.len(), timestamp));
+                        }
+                        self.index.push(offset);
+                    }
+                    Applied::Diagnostic(d) => self.diagnostics.push(d),
+                },
+                Step::NeedMore { .. } | Step::End => return Ok(Walked::End),
+            }
+        }
+    }
+
+    /// Appends a worker's part; `before` is the latest data timestamp before the part, which
+    /// the part's dropouts and parameter changes are dated with when it is later than theirs.
+    fn append(&mut self, mut part: Collected, before: u64) {
+        let base = self.index.len();
+        self.index.append(part.index);
+        self.other_timestamps.extend(
+            part.other_timestamps
+                .into_iter()
+                .map(|(i, t)| (i + base, t)),
+        );
+        self.logged.append(&mut part.logged);
+        self.changes
+            .extend(part.changes.into_iter().map(|c| ParameterChange {
+                timestamp: c.timestamp.max(before),
+                ..c
+            }));
+        self.dropouts
+            .extend(part.dropouts.into_iter().map(|d| Dropout {
+                timestamp: d.timestamp.max(before),
+                ..d
+            }));
+        self.sync_offsets.append(&mut part.sync_offsets);
+        self.diagnostics.append(&mut part.diagnostics);
+    }
 }
 
 impl std::fmt::Debug for Log<'_> {
@@ -133,56 +300,111 @@ impl<'a> Log<'a> {
     fn from_bytes(bytes: Bytes<'a>) -> Result<Log<'a>, ReadError> {
         let data = bytes.as_slice();
         let header = FileHeader::parse(data)?;
-        if data.len() as u64 >= MAX_FILE_LEN {
-            return Err(ReadError::FileTooLarge {
-                len: data.len() as u64,
-            });
-        }
         let mut walker = Walker::new(header);
-        let mut log = Log {
-            meta: Metadata::new(header),
+        let mut all = Collected {
             // Real logs average well over 32 bytes a row; a wrong guess only costs a regrowth.
-            index: Vec::with_capacity(data.len() / 32),
-            other_timestamps: Vec::new(),
-            by_sub: std::sync::OnceLock::new(),
-            logged: Vec::new(),
-            changes: Vec::new(),
-            dropouts: Vec::new(),
-            sync_offsets: Vec::new(),
+            index: RowIndex::with_capacity(data.len() / 32),
             diagnostics: walker.meta.header_diagnostic().into_iter().collect(),
-            bytes: Bytes::Borrowed(&[]),
+            ..Collected::default()
         };
-        loop {
-            if let Some((offset, sub, _)) = walker.fast_row(data) {
-                log.index.push(RowRef::new(offset, sub));
-                continue;
-            }
-            match walker.step(data, 0, true)? {
-                Step::Applied {
-                    offset, applied, ..
-                } => match applied {
-                    Applied::Nothing | Applied::Subscribed { .. } => {}
-                    Applied::Row { sub, timestamp } => {
-                        if walker.meta.subscriptions[sub].timestamp_type()
-                            != Some(Primitive::UInt64)
-                        {
-                            log.other_timestamps.push((log.index.len(), timestamp));
-                        }
-                        log.index.push(RowRef::new(offset as usize, sub));
-                    }
-                    Applied::Logged(m) => log.logged.push(m),
-                    Applied::Dropout(d) => log.dropouts.push(d),
-                    Applied::ParameterChange(c) => log.changes.push(c),
-                    Applied::Sync => log.sync_offsets.push(offset),
-                    Applied::Diagnostic(d) => log.diagnostics.push(d),
-                },
-                Step::NeedMore { .. } | Step::End => break,
-            }
+        // The definitions and the start of the data, where logs subscribe most topics, on
+        // this thread.
+        let prefix = (data.len() / 16).min(32 << 20) as u64;
+        all.walk(&mut walker, data, prefix, false)?;
+        Log::walk_rest(&mut all, &mut walker, data)?;
+        all.index.shrink_to_fit();
+        Ok(Log {
+            bytes,
+            meta: walker.meta,
+            index: all.index,
+            other_timestamps: all.other_timestamps,
+            by_sub: std::sync::OnceLock::new(),
+            logged: all.logged,
+            changes: all.changes,
+            dropouts: all.dropouts,
+            sync_offsets: all.sync_offsets,
+            diagnostics: all.diagnostics,
+        })
+    }
+
+    /// Reads the rest of the file, in parts on several threads when it is large.
+    ///
+    /// Each extra thread starts at a boundary beyond doubt (a chain of strongly plausible
+    /// messages) with a copy of the walker, and reads only messages that cannot change how
+    /// later ones are read. Its part is used only if this thread's own walk lands exactly on
+    /// that boundary with the state the copy had; otherwise this thread reads the part itself.
+    /// The result is the same as a sequential read either way.
+    fn walk_rest(all: &mut Collected, walker: &mut Walker, data: &[u8]) -> Result<(), ReadError> {
+        let threads = std::thread::available_parallelism()
+            .map_or(1, usize::from)
+            .min(8);
+        let start = walker.framer.pos() as usize;
+        let rest = data.len().saturating_sub(start);
+        if threads < 2
+            || rest < PARALLEL_MIN_LEN
+            || walker.framer.has_segments()
+            || walker.framer.is_busy()
+        {
+            all.walk(walker, data, u64::MAX, false)?;
+            return Ok(());
         }
-        log.index.shrink_to_fit();
-        log.meta = walker.meta;
-        log.bytes = bytes;
-        Ok(log)
+        let mut bounds: Vec<usize> = (1..threads)
+            .filter_map(|k| {
+                walker
+                    .framer
+                    .find_boundary(data, start + rest * k / threads, 1 << 20, 4)
+            })
+            .collect();
+        bounds.sort_unstable();
+        bounds.dedup();
+        bounds.push(data.len());
+        let snapshot = walker.clone();
+        std::thread::scope(|scope| -> Result<(), ReadError> {
+            let workers: Vec<_> = bounds
+                .windows(2)
+                .map(|w| {
+                    let (from, to) = (w[0], w[1]);
+                    let mut copy = snapshot.clone();
+                    scope.spawn(move || {
+                        copy.framer.resume_at(from as u64, None);
+                        let mut part = Collected {
+                            index: RowIndex::with_capacity((to - from) / 32),
+                            ..Collected::default()
+                        };
+                        let walked = part.walk(&mut copy, data, to as u64, true);
+                        (walked.map(|_| ()), copy, part)
+                    })
+                })
+                .collect();
+            let mut limit = bounds[0] as u64;
+            for worker in workers {
+                all.walk(walker, data, limit, false)?;
+                let (walked, copy, part) = worker.join().expect("worker threads do not panic");
+                walked?;
+                let usable = walker.framer.pos() == limit
+                    && !walker.framer.is_busy()
+                    && walker.epoch == snapshot.epoch;
+                let next = bounds
+                    .iter()
+                    .copied()
+                    .find(|&b| b as u64 > limit)
+                    .unwrap_or(data.len()) as u64;
+                if usable {
+                    let before = walker.meta.last_timestamp();
+                    let dropped: u64 = part.dropouts.iter().map(|d| u64::from(d.duration_ms)).sum();
+                    walker
+                        .meta
+                        .absorb(part.max_timestamp, part.sync_offsets.len() as u64, dropped);
+                    walker
+                        .framer
+                        .resume_at(copy.framer.pos(), copy.framer.prev());
+                    all.append(part, before);
+                }
+                limit = next;
+            }
+            all.walk(walker, data, u64::MAX, false)?;
+            Ok(())
+        })
     }
 
     /// The file's bytes.
@@ -233,8 +455,8 @@ impl<'a> Log<'a> {
         );
         let by_sub = self.by_sub.get_or_init(|| {
             let mut by_sub = vec![Vec::new(); self.meta.subscriptions.len()];
-            for (i, r) in self.index.iter().enumerate() {
-                by_sub[r.sub()].push(i);
+            for (i, row) in self.data().enumerate() {
+                by_sub[row.subscription.index].push(i);
             }
             by_sub
         });
@@ -259,7 +481,15 @@ impl<'a> Log<'a> {
             range.start <= range.end && range.end <= self.index.len(),
             "row range out of bounds"
         );
-        DataRows { log: self, range }
+        let chunk = self
+            .index
+            .chunks
+            .partition_point(|c| c.end() <= range.start);
+        DataRows {
+            log: self,
+            range,
+            chunk,
+        }
     }
 
     /// Total number of data rows read.
@@ -310,14 +540,21 @@ impl<'a> Log<'a> {
         })
     }
 
-    /// Row number `i` in file order.
+    /// Row number `i`, whose message is at `at`.
     #[inline]
-    fn row(&self, i: usize) -> Row<'_> {
-        let r = self.index[i];
-        let (at, sub) = (r.offset(), r.sub());
+    fn row_at(&self, i: usize, at: u64) -> Row<'_> {
         let bytes = self.bytes.as_slice();
+        let at = at as usize;
         let size = usize::from(u16::from_le_bytes([bytes[at], bytes[at + 1]]));
         let data = &bytes[at + MESSAGE_HEADER_LEN + 2..at + MESSAGE_HEADER_LEN + size];
+        let msg_id = u16::from_le_bytes([
+            bytes[at + MESSAGE_HEADER_LEN],
+            bytes[at + MESSAGE_HEADER_LEN + 1],
+        ]);
+        let sub = self
+            .meta
+            .subscription_at(msg_id, at as u64)
+            .expect("indexed rows have a subscription");
         let subscription = &self.meta.subscriptions[sub];
         let timestamp = match subscription.timestamp {
             Some((ts, Primitive::UInt64)) => {
@@ -335,6 +572,10 @@ impl<'a> Log<'a> {
             subscription,
             schema: &self.meta.schema,
         }
+    }
+
+    fn row(&self, i: usize) -> Row<'_> {
+        self.row_at(i, self.index.get(i).0)
     }
 }
 
@@ -371,6 +612,7 @@ impl DoubleEndedIterator for Rows<'_> {
 pub struct DataRows<'a> {
     log: &'a Log<'a>,
     range: std::ops::Range<usize>,
+    chunk: usize,
 }
 
 impl<'a> Iterator for DataRows<'a> {
@@ -378,7 +620,16 @@ impl<'a> Iterator for DataRows<'a> {
 
     #[inline]
     fn next(&mut self) -> Option<Row<'a>> {
-        self.range.next().map(|i| self.log.row(i))
+        let i = self.range.next()?;
+        let chunks = &self.log.index.chunks;
+        while chunks[self.chunk].end() <= i {
+            self.chunk += 1;
+        }
+        let c = &chunks[self.chunk];
+        Some(
+            self.log
+                .row_at(i, c.base + u64::from(c.offsets[i - c.first])),
+        )
     }
 
     fn size_hint(&self) -> (usize, Option<usize>) {

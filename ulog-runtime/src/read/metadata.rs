@@ -270,15 +270,20 @@ impl Clock {
     }
 }
 
-/// Most subscriptions one log indexes.
-pub(crate) const MAX_SUBSCRIPTIONS: usize = 1 << 24;
-
 /// What one message changed, for the reader driving [`Metadata::apply`].
 #[derive(Debug)]
 pub(crate) enum Applied {
     Nothing,
-    Subscribed { msg_id: u16, min: usize, max: usize },
-    Row { sub: usize, timestamp: u64 },
+    /// A subscription was added; `sizes` are its accepted row lengths if it can be decoded.
+    Subscribed {
+        msg_id: u16,
+        sizes: Option<(usize, usize)>,
+        diagnostic: Option<Diagnostic>,
+    },
+    Row {
+        sub: usize,
+        timestamp: u64,
+    },
     Logged(LoggedMessage),
     Dropout(Dropout),
     ParameterChange(ParameterChange),
@@ -299,6 +304,9 @@ pub struct Metadata {
     pub(crate) subscriptions: Vec<Subscription>,
     /// Subscription index + 1 per `msg_id` (0: none), a flat table for the per-row lookup.
     by_msg_id: Vec<u32>,
+    /// For `msg_id`s subscribed more than once: `(msg_id, offset of the A, subscription)`, in
+    /// file order, so the subscription a row belongs to can be found from its offset.
+    resubscriptions: Vec<(u16, u64, u32)>,
     in_data_section: bool,
     last_timestamp: u64,
     dropouts_us: u64,
@@ -317,6 +325,7 @@ impl Metadata {
             default_parameters: Vec::new(),
             subscriptions: Vec::new(),
             by_msg_id: vec![0; 1 << 16],
+            resubscriptions: Vec::new(),
             in_data_section: false,
             last_timestamp: header.start_timestamp,
             dropouts_us: 0,
@@ -385,6 +394,14 @@ impl Metadata {
     /// The latest data timestamp seen so far (starting at the header's), in µs.
     pub fn last_timestamp(&self) -> u64 {
         self.last_timestamp
+    }
+
+    /// Takes in what a part of the file read by a worker found: its latest timestamp, sync
+    /// messages and dropouts (see the parallel whole-file reader).
+    pub(crate) fn absorb(&mut self, last_timestamp: u64, syncs: u64, dropouts_ms: u64) {
+        self.last_timestamp = self.last_timestamp.max(last_timestamp);
+        self.sync_count += syncs;
+        self.dropouts_us += dropouts_ms * 1000;
     }
 
     /// Interprets one framed message.
@@ -550,9 +567,6 @@ impl Metadata {
             Ok(n) => n.to_owned(),
             Err(_) => return diag(invalid_utf8("subscription name", name)),
         };
-        if self.subscriptions.len() >= MAX_SUBSCRIPTIONS {
-            return diag(DiagnosticKind::TooManySubscriptions { topic: name });
-        }
         let mut sub = Subscription {
             msg_id,
             multi_id,
@@ -602,8 +616,14 @@ impl Metadata {
             },
         }
         if let Some(previous) = self.by_msg_id[usize::from(msg_id)].checked_sub(1) {
+            if !self.resubscriptions.iter().any(|r| r.0 == msg_id) {
+                let first = &self.subscriptions[previous as usize];
+                self.resubscriptions.push((msg_id, first.offset, previous));
+            }
+            self.resubscriptions
+                .push((msg_id, offset, self.subscriptions.len() as u32));
             let previous = previous as usize;
-            problem.get_or_insert(DiagnosticKind::DuplicateMsgId {
+            problem = Some(DiagnosticKind::DuplicateMsgId {
                 msg_id,
                 previous: self.subscriptions[previous].name.clone(),
                 topic: sub.name.clone(),
@@ -612,13 +632,27 @@ impl Metadata {
         let sizes = sub.sizes;
         self.by_msg_id[usize::from(msg_id)] = self.subscriptions.len() as u32 + 1;
         self.subscriptions.push(sub);
-        if let Some(kind) = problem {
-            return diag(kind);
-        }
-        Ok(match sizes {
-            Some((min, max)) => Applied::Subscribed { msg_id, min, max },
-            None => Applied::Nothing,
+        Ok(Applied::Subscribed {
+            msg_id,
+            sizes,
+            diagnostic: problem.map(|kind| Diagnostic { offset, kind }),
         })
+    }
+
+    /// The subscription a row of `msg_id` at file offset `offset` belongs to: the last one
+    /// of that id before the row.
+    #[inline]
+    pub(crate) fn subscription_at(&self, msg_id: u16, offset: u64) -> Option<usize> {
+        if self.resubscriptions.is_empty() || !self.resubscriptions.iter().any(|r| r.0 == msg_id) {
+            return self.by_msg_id[usize::from(msg_id)]
+                .checked_sub(1)
+                .map(|i| i as usize);
+        }
+        self.resubscriptions
+            .iter()
+            .filter(|r| r.0 == msg_id && r.1 < offset)
+            .last()
+            .map(|r| r.2 as usize)
     }
 
     /// Fast path of [`Metadata::apply`] for a `D` message the framer found strongly plausible:

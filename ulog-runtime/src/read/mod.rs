@@ -80,9 +80,15 @@ enum Step<'w> {
 }
 
 /// The framer and the interpreter, stepped together over a window of file bytes.
+#[derive(Clone)]
 struct Walker {
     framer: Framer,
     meta: Metadata,
+    /// Counts the messages that change how rows of an already subscribed `msg_id` are framed
+    /// or read (flag bits, a `msg_id` subscribed again): two walkers with the same epoch read
+    /// the rows they both know alike. (A walker that lacks a newer subscription stops at its
+    /// first row instead of misreading it.)
+    epoch: u64,
 }
 
 impl Walker {
@@ -90,6 +96,7 @@ impl Walker {
         Walker {
             framer: Framer::new(),
             meta: Metadata::new(header),
+            epoch: 0,
         }
     }
 
@@ -122,8 +129,22 @@ impl Walker {
                         kind: DiagnosticKind::Malformed(e),
                     }),
                 };
-                if let Applied::Subscribed { msg_id, min, max } = applied {
-                    self.framer.subscribe(msg_id, min, max);
+                if let Applied::Subscribed {
+                    msg_id,
+                    sizes,
+                    diagnostic,
+                } = &applied
+                {
+                    self.framer.subscribe(*msg_id, *sizes);
+                    if diagnostic
+                        .as_ref()
+                        .is_some_and(|d| matches!(d.kind, DiagnosticKind::DuplicateMsgId { .. }))
+                    {
+                        self.epoch += 1;
+                    }
+                }
+                if ty == b'B' {
+                    self.epoch += 1;
                 }
                 Step::Applied {
                     offset,

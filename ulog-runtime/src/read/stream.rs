@@ -128,7 +128,8 @@ impl<R: Read> StreamReader<R> {
                                 None => continue,
                             }
                         }
-                        Applied::Subscribed { .. } => {
+                        Applied::Subscribed { diagnostic, .. } => {
+                            self.pending = diagnostic;
                             let sub = self.walker.meta.subscriptions.last().expect("just added");
                             Event::Subscription(sub)
                         }
