@@ -26,16 +26,23 @@ impl Totals {
     #[inline]
     pub fn add(&mut self, row: &Row<'_>) {
         self.rows += 1;
-        let (mut leaves, mut sum) = (0u64, 0.0f64);
-        row.for_each_leaf(|v| {
-            leaves += 1;
+        let Some(plan) = row.plan() else { return };
+        // Two partial sums, alternately: one chain of dependent additions would be the
+        // bottleneck.
+        let (mut even, mut odd, mut flip) = (0.0f64, 0.0f64, false);
+        if plan.for_each_leaf(row.data, |v| {
             let x = v.as_f64();
-            if x.is_finite() {
-                sum += x;
+            let x = if x.is_finite() { x } else { 0.0 };
+            if flip {
+                odd += x;
+            } else {
+                even += x;
             }
-        });
-        self.leaves += leaves;
-        self.sum += sum;
+            flip = !flip;
+        }) {
+            self.leaves += plan.leaf_count() as u64;
+            self.sum += even + odd;
+        }
     }
 }
 
@@ -53,16 +60,31 @@ pub struct Scan {
 struct Tally(Vec<Option<((String, u8, u16), Totals)>>);
 
 impl Tally {
-    #[inline]
-    fn add(&mut self, row: &Row<'_>) {
-        let s = row.subscription;
+    fn totals(&mut self, s: &ulog_runtime::read::Subscription) -> &mut Totals {
         if self.0.len() <= s.index() {
             self.0.resize(s.index() + 1, None);
         }
-        self.0[s.index()]
+        &mut self.0[s.index()]
             .get_or_insert_with(|| ((s.name.clone(), s.multi_id, s.msg_id), Totals::default()))
             .1
-            .add(row);
+    }
+
+    #[inline]
+    fn add(&mut self, row: &Row<'_>) {
+        self.totals(row.subscription).add(row);
+    }
+
+    fn merge(&mut self, other: Tally) {
+        for (i, entry) in other.0.into_iter().enumerate() {
+            let Some((key, t)) = entry else { continue };
+            if self.0.len() <= i {
+                self.0.resize(i + 1, None);
+            }
+            let mine = &mut self.0[i].get_or_insert_with(|| (key, Totals::default())).1;
+            mine.rows += t.rows;
+            mine.leaves += t.leaves;
+            mine.sum += t.sum;
+        }
     }
 
     fn finish(self) -> Scan {
@@ -81,16 +103,30 @@ impl Tally {
 }
 
 impl Scan {
-    /// Scans a whole-file log, rows in file order.
+    /// Scans a whole-file log, the rows split in file order between the machine's cores.
     pub fn log(log: &Log<'_>) -> Scan {
-        let mut tally = Tally::default();
-        for row in log.data() {
-            tally.add(&row);
+        let threads = std::thread::available_parallelism().map_or(1, usize::from).min(8);
+        let n = log.row_count();
+        let mut tallies: Vec<Tally> = std::thread::scope(|scope| {
+            let workers: Vec<_> = (0..threads)
+                .map(|k| {
+                    scope.spawn(move || {
+                        let mut tally = Tally::default();
+                        log.data_range(n * k / threads..n * (k + 1) / threads).for_each(|row| tally.add(&row));
+                        tally
+                    })
+                })
+                .collect();
+            workers.into_iter().map(|w| w.join().expect("scan threads do not panic")).collect()
+        });
+        let mut tally = tallies.remove(0);
+        for t in tallies {
+            tally.merge(t);
         }
         tally.finish()
     }
 
-    /// Scans a stream with [`StreamReader`].
+    /// Scans a stream with [`StreamReader`], row by row.
     pub fn stream(input: impl Read) -> Result<Scan, ReadError> {
         let mut tally = Tally::default();
         let mut reader = StreamReader::new(input)?;

@@ -541,7 +541,7 @@ impl<'a> Log<'a> {
     }
 
     /// Row number `i`, whose message is at `at`.
-    #[inline]
+    #[inline(always)]
     fn row_at(&self, i: usize, at: u64) -> Row<'_> {
         let bytes = self.bytes.as_slice();
         let at = at as usize;
@@ -634,6 +634,24 @@ impl<'a> Iterator for DataRows<'a> {
 
     fn size_hint(&self) -> (usize, Option<usize>) {
         self.range.size_hint()
+    }
+
+    /// Internal iteration, chunk by chunk (what `for_each`, `sum` and friends use).
+    #[inline]
+    fn fold<B, F: FnMut(B, Row<'a>) -> B>(self, init: B, mut f: F) -> B {
+        let mut acc = init;
+        let (log, range) = (self.log, self.range);
+        for c in &log.index.chunks[self.chunk..] {
+            if c.first >= range.end {
+                break;
+            }
+            let from = range.start.max(c.first);
+            let to = range.end.min(c.end());
+            for (i, &rel) in (from..to).zip(&c.offsets[from - c.first..to - c.first]) {
+                acc = f(acc, log.row_at(i, c.base + u64::from(rel)));
+            }
+        }
+        acc
     }
 }
 

@@ -307,6 +307,8 @@ pub struct Metadata {
     /// For `msg_id`s subscribed more than once: `(msg_id, offset of the A, subscription)`, in
     /// file order, so the subscription a row belongs to can be found from its offset.
     resubscriptions: Vec<(u16, u64, u32)>,
+    /// One bit per `msg_id`: whether it is in `resubscriptions`.
+    resubscribed: Vec<u64>,
     in_data_section: bool,
     last_timestamp: u64,
     dropouts_us: u64,
@@ -326,6 +328,7 @@ impl Metadata {
             subscriptions: Vec::new(),
             by_msg_id: vec![0; 1 << 16],
             resubscriptions: Vec::new(),
+            resubscribed: vec![0; (1 << 16) / 64],
             in_data_section: false,
             last_timestamp: header.start_timestamp,
             dropouts_us: 0,
@@ -643,7 +646,7 @@ impl Metadata {
     /// of that id before the row.
     #[inline]
     pub(crate) fn subscription_at(&self, msg_id: u16, offset: u64) -> Option<usize> {
-        if self.resubscriptions.is_empty() || !self.resubscriptions.iter().any(|r| r.0 == msg_id) {
+        if self.resubscribed[usize::from(msg_id / 64)] & (1 << (msg_id % 64)) == 0 {
             return self.by_msg_id[usize::from(msg_id)]
                 .checked_sub(1)
                 .map(|i| i as usize);
