@@ -105,19 +105,25 @@ impl Tally {
 impl Scan {
     /// Scans a whole-file log, the rows split in file order between the machine's cores.
     pub fn log(log: &Log<'_>) -> Scan {
-        let threads = std::thread::available_parallelism().map_or(1, usize::from).min(8);
+        let threads = std::thread::available_parallelism()
+            .map_or(1, usize::from)
+            .min(8);
         let n = log.row_count();
         let mut tallies: Vec<Tally> = std::thread::scope(|scope| {
             let workers: Vec<_> = (0..threads)
                 .map(|k| {
                     scope.spawn(move || {
                         let mut tally = Tally::default();
-                        log.data_range(n * k / threads..n * (k + 1) / threads).for_each(|row| tally.add(&row));
+                        log.data_range(n * k / threads..n * (k + 1) / threads)
+                            .for_each(|row| tally.add(&row));
                         tally
                     })
                 })
                 .collect();
-            workers.into_iter().map(|w| w.join().expect("scan threads do not panic")).collect()
+            workers
+                .into_iter()
+                .map(|w| w.join().expect("scan threads do not panic"))
+                .collect()
         });
         let mut tally = tallies.remove(0);
         for t in tallies {

@@ -93,9 +93,20 @@ fn scan_figures_equal_pyulogs() {
         compared += 1;
         let log = Log::from_slice(&bytes).unwrap();
         let scan = Scan::log(&log);
-        assert_eq!(
-            Scan::stream(&bytes[..]).unwrap(),
-            scan,
+        // The same rows and leaves; the sums may differ in the last bits, being added in
+        // another order (rows are split between threads).
+        let streamed = Scan::stream(&bytes[..]).unwrap();
+        let same = |a: &Totals, b: &Totals| {
+            a.rows == b.rows && a.leaves == b.leaves && close(a.sum, b.sum)
+        };
+        assert!(
+            same(&streamed.all, &scan.all)
+                && streamed.topics.len() == scan.topics.len()
+                && streamed
+                    .topics
+                    .iter()
+                    .zip(&scan.topics)
+                    .all(|(a, b)| a.0 == b.0 && same(a.1, b.1)),
             "{}: mmap and stream scans differ",
             short_name(path)
         );
