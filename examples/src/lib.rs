@@ -51,13 +51,16 @@ impl Totals {
 pub struct Scan {
     /// Every row of every subscription.
     pub all: Totals,
-    /// Per `(topic, multi_id, msg_id)`, for subscriptions with rows.
-    pub topics: BTreeMap<(String, u8, u16), Totals>,
+    /// Per topic instance, for subscriptions with rows.
+    pub topics: BTreeMap<TopicKey, Totals>,
 }
+
+/// A topic instance: `(topic, multi_id, msg_id)`.
+pub type TopicKey = (String, u8, u16);
 
 /// Per-subscription totals, indexed like the reader's subscription list.
 #[derive(Default)]
-struct Tally(Vec<Option<((String, u8, u16), Totals)>>);
+struct Tally(Vec<Option<(TopicKey, Totals)>>);
 
 impl Tally {
     fn totals(&mut self, s: &ulog_runtime::read::Subscription) -> &mut Totals {

@@ -382,16 +382,19 @@ fn at_least_97_percent_of_untouched_rows_are_recovered() {
     );
 }
 
-/// Everything a reader returns that the parallel whole-file reader must reproduce.
-fn full_read(
-    log: &Log<'_>,
-) -> (
+/// Everything a reader returns that the parallel whole-file reader must reproduce: rows
+/// (offset, timestamp, data), diagnostics, logged strings + parameter changes + dropouts,
+/// the number of sync messages, and the latest timestamp.
+#[derive(Debug, PartialEq)]
+struct Everything(
     Vec<(u64, u64, Vec<u8>)>,
     Vec<String>,
     Vec<String>,
     usize,
     u64,
-) {
+);
+
+fn full_read(log: &Log<'_>) -> Everything {
     let rows = log
         .data()
         .map(|r| (r.offset, r.timestamp, r.data.to_vec()))
@@ -404,7 +407,7 @@ fn full_read(
         .collect();
     other.extend(log.parameter_changes().iter().map(|c| format!("{c:?}")));
     other.extend(log.dropouts().iter().map(|d| format!("{d:?}")));
-    (
+    Everything(
         rows,
         diags,
         other,
@@ -413,15 +416,7 @@ fn full_read(
     )
 }
 
-fn streamed(
-    bytes: &[u8],
-) -> (
-    Vec<(u64, u64, Vec<u8>)>,
-    Vec<String>,
-    Vec<String>,
-    usize,
-    u64,
-) {
+fn streamed(bytes: &[u8]) -> Everything {
     let mut reader = StreamReader::new(bytes).unwrap();
     let (mut rows, mut diags, mut logged, mut changes, mut dropouts, mut syncs) =
         (vec![], vec![], vec![], vec![], vec![], 0);
@@ -438,7 +433,7 @@ fn streamed(
     }
     logged.extend(changes);
     logged.extend(dropouts);
-    (
+    Everything(
         rows,
         diags,
         logged,

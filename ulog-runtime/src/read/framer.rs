@@ -522,7 +522,7 @@ fn plausible_format(p: &[u8]) -> bool {
 fn plausible_key(p: &[u8]) -> bool {
     let key_len = usize::from(p[0]);
     key_len >= 3
-        && 1 + key_len <= p.len()
+        && key_len < p.len()
         && p[1..=key_len]
             .iter()
             .all(|&c| c.is_ascii_graphic() || c == b' ')

@@ -66,11 +66,11 @@ impl RowIndex {
 
     #[inline]
     fn push(&mut self, offset: u64) {
-        if let Some(c) = self.chunks.last_mut() {
-            if let Ok(rel) = u32::try_from(offset - c.base) {
-                c.offsets.push(rel);
-                return;
-            }
+        if let Some(c) = self.chunks.last_mut()
+            && let Ok(rel) = u32::try_from(offset - c.base)
+        {
+            c.offsets.push(rel);
+            return;
         }
         self.new_chunk(offset);
     }

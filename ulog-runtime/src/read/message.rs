@@ -399,15 +399,14 @@ impl Message<'_> {
         | Message::Parameter(e)
         | Message::MultiInfo { entry: e, .. }
         | Message::DefaultParameter { entry: e, .. } = self
+            && e.key.len() > usize::from(u8::MAX)
         {
-            if e.key.len() > usize::from(u8::MAX) {
-                return Err(MessageTooLarge {
-                    ty,
-                    what: "key",
-                    size: e.key.len(),
-                    limit: 255,
-                });
-            }
+            return Err(MessageTooLarge {
+                ty,
+                what: "key",
+                size: e.key.len(),
+                limit: 255,
+            });
         }
         let start = out.len();
         out.extend_from_slice(&[0, 0, ty]);

@@ -338,7 +338,7 @@ impl Metadata {
 
     /// A diagnostic for the header itself, if any.
     pub(crate) fn header_diagnostic(&self) -> Option<Diagnostic> {
-        (self.header.version > KNOWN_VERSION).then(|| Diagnostic {
+        (self.header.version > KNOWN_VERSION).then_some(Diagnostic {
             offset: 7,
             kind: DiagnosticKind::UnknownVersion(self.header.version),
         })
@@ -653,8 +653,8 @@ impl Metadata {
         }
         self.resubscriptions
             .iter()
-            .filter(|r| r.0 == msg_id && r.1 < offset)
-            .last()
+            .rev()
+            .find(|r| r.0 == msg_id && r.1 < offset)
             .map(|r| r.2 as usize)
     }
 

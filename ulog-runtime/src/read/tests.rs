@@ -542,7 +542,7 @@ fn garbage_is_skipped_and_reported_exactly() {
     );
     assert_eq!(
         log.corrupt_ranges().collect::<Vec<_>>(),
-        [at as u64..(at + 7) as u64]
+        vec![(at as u64..(at + 7) as u64)]
     );
     let (rows, diags) = stream_rows(&f.0, 1);
     assert_eq!(rows, log_rows(&log));
@@ -603,7 +603,7 @@ fn zeros_up_to_the_end_are_one_skipped_range() {
     assert_eq!(log.row_count(), offsets.len());
     assert_eq!(
         log.corrupt_ranges().collect::<Vec<_>>(),
-        [len as u64..(len + 100_000) as u64]
+        vec![(len as u64..(len + 100_000) as u64)]
     );
 }
 
