@@ -25,3 +25,8 @@ pub mod value;
 pub use error::{Diagnostic, DiagnosticKind, ReadError};
 pub use read::{Event, Log, Row, StreamReader};
 pub use value::{Scalar, Value};
+
+/// The README's examples, compiled as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../../README.md")]
+struct ReadmeDoctests;
