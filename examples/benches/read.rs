@@ -8,8 +8,10 @@
 //! its data messages with shifted, still increasing timestamps. Benchmarks:
 //! - `baseline_copy`: `memcpy` of the whole file (memory bandwidth);
 //! - `baseline_header_walk`: follows the 3-byte headers, no validation;
-//! - `walk`: (a) message boundaries, validated and indexed: `Log::from_slice`;
-//! - `decode_leaves`: (b) `walk`, then every leaf of every row decoded (the `scan` example);
+//! - `walk`: (a) message boundaries: every message framed and validated, corruption recovery
+//!   armed, rows counted (`read::summarize`);
+//! - `open`: `walk` plus the row index (`Log::from_slice`);
+//! - `decode_leaves`: (b) `open`, then every leaf of every row decoded (the `scan` example);
 //! - `stream_leaves`: the same through `StreamReader` (memory bounded by a few messages).
 
 use std::hint::black_box;
@@ -68,6 +70,13 @@ fn baseline_header_walk(b: Bencher) {
 
 #[divan::bench(sample_count = 10, sample_size = 1)]
 fn walk(b: Bencher) {
+    let data = big();
+    b.counter(BytesCount::new(data.len()))
+        .bench_local(|| black_box(ulog_runtime::read::summarize(black_box(data)).unwrap().rows));
+}
+
+#[divan::bench(sample_count = 10, sample_size = 1)]
+fn open(b: Bencher) {
     let data = big();
     b.counter(BytesCount::new(data.len()))
         .bench_local(|| black_box(Log::from_slice(black_box(data)).unwrap().row_count()));

@@ -7,6 +7,7 @@
 use std::collections::BTreeMap;
 use std::io::Read;
 
+use ulog_runtime::read::Subscription;
 use ulog_runtime::{Event, Log, ReadError, Row, StreamReader};
 
 /// Totals over rows: how many, how many non-padding leaf values, and the sum of the finite
@@ -27,21 +28,15 @@ impl Totals {
     pub fn add(&mut self, row: &Row<'_>) {
         self.rows += 1;
         let Some(plan) = row.plan() else { return };
-        // Two partial sums, alternately: one chain of dependent additions would be the
-        // bottleneck.
-        let (mut even, mut odd, mut flip) = (0.0f64, 0.0f64, false);
+        let mut sum = 0.0f64;
         if plan.for_each_leaf(row.data, |v| {
             let x = v.as_f64();
-            let x = if x.is_finite() { x } else { 0.0 };
-            if flip {
-                odd += x;
-            } else {
-                even += x;
+            if x.is_finite() {
+                sum += x;
             }
-            flip = !flip;
         }) {
             self.leaves += plan.leaf_count() as u64;
-            self.sum += even + odd;
+            self.sum += sum;
         }
     }
 }
@@ -60,43 +55,45 @@ pub type TopicKey = (String, u8, u16);
 
 /// Per-subscription totals, indexed like the reader's subscription list.
 #[derive(Default)]
-struct Tally(Vec<Option<(TopicKey, Totals)>>);
+struct Tally(Vec<Totals>);
 
 impl Tally {
-    fn totals(&mut self, s: &ulog_runtime::read::Subscription) -> &mut Totals {
-        if self.0.len() <= s.index() {
-            self.0.resize(s.index() + 1, None);
-        }
-        &mut self.0[s.index()]
-            .get_or_insert_with(|| ((s.name.clone(), s.multi_id, s.msg_id), Totals::default()))
-            .1
-    }
-
     #[inline]
     fn add(&mut self, row: &Row<'_>) {
-        self.totals(row.subscription).add(row);
+        let i = row.subscription.index();
+        if self.0.len() <= i {
+            self.0.resize(i + 1, Totals::default());
+        }
+        self.0[i].add(row);
     }
 
     fn merge(&mut self, other: Tally) {
-        for (i, entry) in other.0.into_iter().enumerate() {
-            let Some((key, t)) = entry else { continue };
-            if self.0.len() <= i {
-                self.0.resize(i + 1, None);
-            }
-            let mine = &mut self.0[i].get_or_insert_with(|| (key, Totals::default())).1;
+        if self.0.len() < other.0.len() {
+            self.0.resize(other.0.len(), Totals::default());
+        }
+        for (mine, t) in self.0.iter_mut().zip(other.0) {
             mine.rows += t.rows;
             mine.leaves += t.leaves;
             mine.sum += t.sum;
         }
     }
 
-    fn finish(self) -> Scan {
+    /// Names the totals (`subscriptions` is the reader's list) and adds them up.
+    fn finish(self, subscriptions: &[Subscription]) -> Scan {
         let mut scan = Scan::default();
-        for (key, t) in self.0.into_iter().flatten() {
+        for (t, s) in self
+            .0
+            .into_iter()
+            .zip(subscriptions)
+            .filter(|(t, _)| t.rows > 0)
+        {
             scan.all.rows += t.rows;
             scan.all.leaves += t.leaves;
             scan.all.sum += t.sum;
-            let e = scan.topics.entry(key).or_default();
+            let e = scan
+                .topics
+                .entry((s.name.clone(), s.multi_id, s.msg_id))
+                .or_default();
             e.rows += t.rows;
             e.leaves += t.leaves;
             e.sum += t.sum;
@@ -132,7 +129,7 @@ impl Scan {
         for t in tallies {
             tally.merge(t);
         }
-        tally.finish()
+        tally.finish(log.subscriptions())
     }
 
     /// Scans a stream with [`StreamReader`], row by row.
@@ -144,7 +141,7 @@ impl Scan {
                 tally.add(&row);
             }
         }
-        Ok(tally.finish())
+        Ok(tally.finish(reader.metadata().subscriptions()))
     }
 }
 

@@ -467,6 +467,13 @@ fn parallel_whole_file_reading_equals_sequential_streaming() {
     for (what, bytes) in cases {
         let log = Log::from_slice(&bytes).unwrap();
         assert!(log.row_count() > 100_000);
+        // The summary walks the same way without keeping rows.
+        let summary = ulog_runtime::read::summarize(&bytes).unwrap();
+        assert_eq!(summary.rows, log.row_count(), "{what}");
+        assert_eq!(summary.diagnostics, log.diagnostics(), "{what}");
+        assert_eq!(summary.sync_offsets, log.sync_offsets(), "{what}");
+        assert_eq!(summary.dropouts, log.dropouts(), "{what}");
+        assert_eq!(summary.logged_messages, log.logged_messages(), "{what}");
         assert_eq!(
             full_read(&log),
             streamed(&bytes),

@@ -49,7 +49,8 @@ enum Plausibility {
 #[derive(Debug, Clone, Copy)]
 struct Resync {
     bad: u64,
-    bad_size: Option<u16>,
+    /// Size and type of the failed message's header.
+    bad_header: Option<(u16, u8)>,
     scan: u64,
 }
 
@@ -105,16 +106,16 @@ impl Framer {
         };
     }
 
-    /// Fast path for whole-file reading (window = the whole file from offset 0): the `D`
-    /// message at the current position if it is strongly plausible, as `(offset, size)`,
-    /// without moving; [`Framer::commit`] then accepts it. `None` means "take the general path".
+    /// Fast path: the `D` message at the current position if it is strongly plausible and
+    /// whole in the window `[base, base + w.len())`, as `(index in w, size)`, without moving;
+    /// [`Framer::commit`] then accepts it. `None` means "take the general path".
     #[inline]
-    pub(crate) fn peek_data(&self, file: &[u8]) -> Option<(usize, usize)> {
+    pub(crate) fn peek_data(&self, w: &[u8], base: u64) -> Option<(usize, usize)> {
         if self.resync.is_some() || !self.notices.is_empty() {
             return None;
         }
-        let p = self.pos as usize;
-        let h = file.get(p..p + MESSAGE_HEADER_LEN + 2)?;
+        let p = usize::try_from(self.pos.checked_sub(base)?).ok()?;
+        let h = w.get(p..p + MESSAGE_HEADER_LEN + 2)?;
         if h[2] != b'D' {
             return None;
         }
@@ -123,8 +124,8 @@ impl Framer {
         let end = p + MESSAGE_HEADER_LEN + usize::from(size);
         (range.min <= size
             && size <= range.max
-            && end as u64 <= self.segment_end
-            && end <= file.len())
+            && base + end as u64 <= self.segment_end
+            && end <= w.len())
         .then_some((p, usize::from(size)))
     }
 
@@ -184,11 +185,11 @@ impl Framer {
         })
     }
 
-    /// Accepts the message found by [`Framer::peek_data`].
+    /// Accepts the message found by [`Framer::peek_data`] (`offset` in the file).
     #[inline]
-    pub(crate) fn commit(&mut self, offset: usize, size: usize) {
-        self.prev = Some(offset as u64);
-        self.pos = (offset + MESSAGE_HEADER_LEN + size) as u64;
+    pub(crate) fn commit(&mut self, offset: u64, size: usize) {
+        self.prev = Some(offset);
+        self.pos = offset + (MESSAGE_HEADER_LEN + size) as u64;
     }
 
     /// The next frame of the window `[base, base + w.len())`; `eof` says the window reaches the
@@ -244,7 +245,7 @@ impl Framer {
             let ty = h[2];
             let msg_end = p + MESSAGE_HEADER_LEN as u64 + u64::from(size);
             if msg_end > end {
-                self.fail(p, Some(size));
+                self.fail(p, Some((size, ty)));
                 continue;
             }
             let Some(msg) = window(w, base, p, MESSAGE_HEADER_LEN + usize::from(size)) else {
@@ -267,7 +268,7 @@ impl Framer {
                 }
             };
             if !accepted {
-                self.fail(p, Some(size));
+                self.fail(p, Some((size, ty)));
                 continue;
             }
             self.prev = Some(p);
@@ -291,11 +292,11 @@ impl Framer {
         Frame::NeedMore { keep_from }
     }
 
-    fn fail(&mut self, bad: u64, bad_size: Option<u16>) {
+    fn fail(&mut self, bad: u64, bad_header: Option<(u16, u8)>) {
         let scan = self.prev.map_or(bad + 1, |prev| prev + 1).max(self.floor);
         self.resync = Some(Resync {
             bad,
-            bad_size,
+            bad_header,
             scan,
         });
     }
@@ -410,11 +411,10 @@ impl Framer {
             if q + MESSAGE_HEADER_LEN as u64 > end {
                 self.resync = None;
                 self.pos = end;
-                return match rs.bad_size {
-                    Some(size)
+                return match rs.bad_header {
+                    Some((size, ty))
                         if rs.bad + MESSAGE_HEADER_LEN as u64 + u64::from(size) > end
-                            && window(w, base, rs.bad + 2, 1)
-                                .is_some_and(|t| MessageType::from_byte(t[0]).is_some()) =>
+                            && MessageType::from_byte(ty).is_some() =>
                     {
                         Frame::Truncated {
                             offset: rs.bad,

@@ -8,7 +8,7 @@ mod message;
 mod metadata;
 mod stream;
 
-pub use log::{DataRows, Log, Rows};
+pub use log::{DataRows, Log, Rows, Summary, summarize};
 pub use message::{
     FLAG_BITS_LEN, FileHeader, FlagBits, HEADER_LEN, KNOWN_VERSION, KeyValue, MAGIC,
     MESSAGE_HEADER_LEN, MalformedMessage, Message, MessageTooLarge, MessageType, SYNC_MAGIC,
@@ -66,6 +66,15 @@ impl<'a> Row<'a> {
     }
 }
 
+/// A row found by the fast path: file offset of the message, its data within the window,
+/// subscription and timestamp.
+struct FastRow {
+    offset: u64,
+    data: std::ops::Range<usize>,
+    sub: usize,
+    timestamp: u64,
+}
+
 /// What one step of walking a file produced.
 enum Step<'w> {
     Applied {
@@ -100,16 +109,22 @@ impl Walker {
         }
     }
 
-    /// The next row if the fast path applies (whole file in `w`, from offset 0):
-    /// `(offset, subscription, timestamp)`.
+    /// The next row if the fast path applies (a strongly plausible `D` message, whole in the
+    /// window `[base, base + w.len())`, of a subscription with a `uint64_t` timestamp).
     #[inline]
-    fn fast_row(&mut self, w: &[u8]) -> Option<(usize, usize, u64)> {
-        let (offset, size) = self.framer.peek_data(w)?;
-        let payload = &w[offset + MESSAGE_HEADER_LEN..offset + MESSAGE_HEADER_LEN + size];
+    fn fast_row(&mut self, w: &[u8], base: u64) -> Option<FastRow> {
+        let (at, size) = self.framer.peek_data(w, base)?;
+        let payload = &w[at + MESSAGE_HEADER_LEN..at + MESSAGE_HEADER_LEN + size];
         let msg_id = u16::from_le_bytes([payload[0], payload[1]]);
         let (sub, timestamp) = self.meta.fast_row(msg_id, &payload[2..])?;
+        let offset = base + at as u64;
         self.framer.commit(offset, size);
-        Some((offset, sub, timestamp))
+        Some(FastRow {
+            offset,
+            data: at + MESSAGE_HEADER_LEN + 2..at + MESSAGE_HEADER_LEN + size,
+            sub,
+            timestamp,
+        })
     }
 
     fn step<'w>(&mut self, w: &'w [u8], base: u64, eof: bool) -> Result<Step<'w>, ReadError> {

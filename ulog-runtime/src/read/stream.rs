@@ -63,7 +63,10 @@ pub enum Event<'a> {
 /// ```
 pub struct StreamReader<R> {
     input: R,
+    /// Bytes read; the window is `buf[start..end]`, holding the file from offset `base`.
     buf: Vec<u8>,
+    start: usize,
+    end: usize,
     base: u64,
     eof: bool,
     walker: Walker,
@@ -88,7 +91,9 @@ impl<R: Read> StreamReader<R> {
         let pending = walker.meta.header_diagnostic();
         Ok(StreamReader {
             input,
-            buf: Vec::with_capacity(4 * CHUNK),
+            buf: vec![0; 4 * CHUNK],
+            start: 0,
+            end: 0,
             base: HEADER_LEN as u64,
             eof: false,
             walker,
@@ -107,8 +112,19 @@ impl<R: Read> StreamReader<R> {
         if let Some(d) = self.pending.take() {
             return Ok(Some(Event::Diagnostic(d)));
         }
+        let (start, end) = (self.start, self.end);
+        if let Some(row) = self.walker.fast_row(&self.buf[start..end], self.base) {
+            return Ok(Some(Event::Row(Row {
+                timestamp: row.timestamp,
+                offset: row.offset,
+                data: &self.buf[start..end][row.data],
+                subscription: &self.walker.meta.subscriptions[row.sub],
+                schema: &self.walker.meta.schema,
+            })));
+        }
         loop {
-            let step = self.walker.step(&self.buf, self.base, self.eof)?;
+            let window = &self.buf[self.start..self.end];
+            let step = self.walker.step(window, self.base, self.eof)?;
             match step {
                 Step::End => return Ok(None),
                 Step::NeedMore { keep_from } => {
@@ -122,7 +138,7 @@ impl<R: Read> StreamReader<R> {
                 } => {
                     let event = match applied {
                         Applied::Nothing => {
-                            let ty = self.buf[(offset - self.base) as usize + 2];
+                            let ty = window[(offset - self.base) as usize + 2];
                             match MessageType::from_byte(ty) {
                                 Some(ty) => Event::Definition { offset, ty },
                                 None => continue,
@@ -140,7 +156,7 @@ impl<R: Read> StreamReader<R> {
                             Event::Row(Row {
                                 timestamp,
                                 offset,
-                                data: &self.buf[start..start + len],
+                                data: &self.buf[self.start..self.end][start..start + len],
                                 subscription: &self.walker.meta.subscriptions[sub],
                                 schema: &self.walker.meta.schema,
                             })
@@ -157,48 +173,47 @@ impl<R: Read> StreamReader<R> {
         }
     }
 
-    /// Drops the bytes before `keep_from` and reads at least one more chunk (or hits the end).
+    /// Drops the bytes before `keep_from` and reads more (at least one byte, or hits the end).
     fn fill(&mut self, keep_from: u64) -> Result<(), ReadError> {
-        let end = self.base + self.buf.len() as u64;
+        let end = self.base + (self.end - self.start) as u64;
         if keep_from >= end {
             // Skip input up to `keep_from` (a jump to an appended segment).
             let mut to_skip = keep_from - end;
-            self.buf.clear();
-            self.base = end;
+            (self.start, self.end, self.base) = (0, 0, end);
             while to_skip > 0 {
                 let n = std::io::copy(&mut (&mut self.input).take(to_skip), &mut std::io::sink())?;
                 if n == 0 {
-                    break;
+                    self.eof = true;
+                    return Ok(());
                 }
                 to_skip -= n;
                 self.base += n;
             }
-            if to_skip > 0 {
-                self.eof = true;
-                return Ok(());
-            }
         } else {
-            self.buf.drain(..(keep_from - self.base) as usize);
+            self.start += (keep_from - self.base) as usize;
             self.base = keep_from;
         }
-        let old = self.buf.len();
-        self.buf.resize(old + CHUNK, 0);
-        let mut got = 0;
-        while got < CHUNK {
-            match self.input.read(&mut self.buf[old + got..]) {
-                Ok(0) => {
-                    self.eof = true;
-                    break;
-                }
-                Ok(n) => got += n,
-                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-                Err(e) => {
-                    self.buf.truncate(old + got);
-                    return Err(e.into());
-                }
+        // Make room for a chunk: move the window to the front, or grow the buffer.
+        if self.buf.len() - self.end < CHUNK {
+            self.buf.copy_within(self.start..self.end, 0);
+            (self.start, self.end) = (0, self.end - self.start);
+            if self.buf.len() - self.end < CHUNK {
+                self.buf.resize(self.end + 2 * CHUNK, 0);
             }
         }
-        self.buf.truncate(old + got);
-        Ok(())
+        loop {
+            match self.input.read(&mut self.buf[self.end..]) {
+                Ok(0) => {
+                    self.eof = true;
+                    return Ok(());
+                }
+                Ok(n) => {
+                    self.end += n;
+                    return Ok(());
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e.into()),
+            }
+        }
     }
 }
