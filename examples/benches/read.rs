@@ -11,7 +11,9 @@
 //! - `walk`: (a) message boundaries: every message framed and validated, corruption recovery
 //!   armed, rows counted (`read::summarize`);
 //! - `open`: `walk` plus the row index (`Log::from_slice`);
-//! - `decode_leaves`: (b) `open`, then every leaf of every row decoded (the `scan` example);
+//! - `decode_leaves`: (b) every leaf of every row decoded in one pass (`read::fold_rows`, as
+//!   the `scan` example does);
+//! - `open_then_decode`: `open`, then the leaves decoded from the index (`Scan::log`);
 //! - `stream_leaves`: the same through `StreamReader` (memory bounded by a few messages).
 
 use std::hint::black_box;
@@ -84,6 +86,13 @@ fn open(b: Bencher) {
 
 #[divan::bench(sample_count = 10, sample_size = 1)]
 fn decode_leaves(b: Bencher) {
+    let data = big();
+    b.counter(BytesCount::new(data.len()))
+        .bench_local(|| black_box(examples::Scan::bytes(black_box(data)).unwrap().all));
+}
+
+#[divan::bench(sample_count = 10, sample_size = 1)]
+fn open_then_decode(b: Bencher) {
     let data = big();
     b.counter(BytesCount::new(data.len())).bench_local(|| {
         let log = Log::from_slice(black_box(data)).unwrap();

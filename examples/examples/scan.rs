@@ -26,7 +26,8 @@ fn main() -> ExitCode {
             .map_err(ulog_runtime::ReadError::from)
             .and_then(|f| Scan::stream(std::io::BufReader::new(f)))
     } else {
-        Log::open(path).map(|log| Scan::log(&log))
+        // The file, memory-mapped, read in one pass on all cores.
+        Log::open(path).and_then(|log| Scan::bytes(log.bytes()))
     };
     let scan = match scan {
         Ok(scan) => scan,

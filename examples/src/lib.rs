@@ -132,6 +132,19 @@ impl Scan {
         tally.finish(log.subscriptions())
     }
 
+    /// Scans a file held in memory in one pass ([`ulog_runtime::read::fold_rows`]): rows are
+    /// decoded as they are found, on all cores for large files.
+    pub fn bytes(bytes: &[u8]) -> Result<Scan, ReadError> {
+        let (summary, parts) =
+            ulog_runtime::read::fold_rows(bytes, Tally::default, |tally, row| tally.add(row))?;
+        let mut parts = parts.into_iter();
+        let mut tally = parts.next().unwrap_or_default();
+        for t in parts {
+            tally.merge(t);
+        }
+        Ok(tally.finish(summary.metadata.subscriptions()))
+    }
+
     /// Scans a stream with [`StreamReader`], row by row.
     pub fn stream(input: impl Read) -> Result<Scan, ReadError> {
         let mut tally = Tally::default();

@@ -474,6 +474,18 @@ fn parallel_whole_file_reading_equals_sequential_streaming() {
         assert_eq!(summary.sync_offsets, log.sync_offsets(), "{what}");
         assert_eq!(summary.dropouts, log.dropouts(), "{what}");
         assert_eq!(summary.logged_messages, log.logged_messages(), "{what}");
+        // The one-pass fold sees exactly the rows of the index, in file order.
+        let (folded, parts) =
+            ulog_runtime::read::fold_rows(&bytes, Vec::new, |rows: &mut Vec<u64>, row| {
+                rows.push(row.offset)
+            })
+            .unwrap();
+        assert_eq!(folded.rows, log.row_count(), "{what}");
+        assert_eq!(
+            parts.concat(),
+            log.data().map(|r| r.offset).collect::<Vec<_>>(),
+            "{what}"
+        );
         assert_eq!(
             full_read(&log),
             streamed(&bytes),

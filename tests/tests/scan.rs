@@ -96,9 +96,21 @@ fn scan_figures_equal_pyulogs() {
         // The same rows and leaves; the sums may differ in the last bits, being added in
         // another order (rows are split between threads).
         let streamed = Scan::stream(&bytes[..]).unwrap();
+        let one_pass = Scan::bytes(&bytes).unwrap();
         let same = |a: &Totals, b: &Totals| {
             a.rows == b.rows && a.leaves == b.leaves && close(a.sum, b.sum)
         };
+        assert!(
+            same(&one_pass.all, &scan.all)
+                && one_pass.topics.len() == scan.topics.len()
+                && one_pass
+                    .topics
+                    .iter()
+                    .zip(&scan.topics)
+                    .all(|(a, b)| a.0 == b.0 && same(a.1, b.1)),
+            "{}: one-pass and indexed scans differ",
+            short_name(path)
+        );
         assert!(
             same(&streamed.all, &scan.all)
                 && streamed.topics.len() == scan.topics.len()

@@ -36,9 +36,6 @@ struct RowIndex {
     chunks: Vec<Chunk>,
     /// Capacity for the first chunk.
     reserve: usize,
-    /// Count rows without keeping their offsets ([`summarize`]).
-    counting: bool,
-    counted: usize,
 }
 
 #[derive(Debug)]
@@ -63,26 +60,12 @@ impl RowIndex {
         }
     }
 
-    fn counting() -> RowIndex {
-        RowIndex {
-            counting: true,
-            ..RowIndex::default()
-        }
-    }
-
     fn len(&self) -> usize {
-        if self.counting {
-            return self.counted;
-        }
         self.chunks.last().map_or(0, Chunk::end)
     }
 
     #[inline]
     fn push(&mut self, offset: u64) {
-        if self.counting {
-            self.counted += 1;
-            return;
-        }
         if let Some(c) = self.chunks.last_mut()
             && let Ok(rel) = u32::try_from(offset - c.base)
         {
@@ -104,7 +87,6 @@ impl RowIndex {
     }
 
     fn append(&mut self, other: RowIndex) {
-        self.counted += other.counted;
         for mut c in other.chunks {
             c.first = self.len();
             self.chunks.push(c);
@@ -159,10 +141,106 @@ pub struct Log<'a> {
     diagnostics: Vec<Diagnostic>,
 }
 
-/// What walking (part of) a file collects besides the metadata.
+/// Where a walk puts the rows it finds: the row index of a [`Log`], a count
+/// ([`summarize`]), or a fold ([`fold_rows`]).
+trait RowSink: Send + Sized {
+    /// Takes one row: its message offset, packed bytes, subscription and timestamp.
+    fn row(&mut self, meta: &Metadata, offset: u64, data: &[u8], sub: usize, timestamp: u64);
+    /// Rows taken so far.
+    fn len(&self) -> usize;
+    /// An empty sink for a part of about `bytes` bytes read by another thread.
+    fn fork(&self, bytes: usize) -> Self;
+    /// Appends what another thread's sink took, which comes next in file order.
+    fn append(&mut self, other: Self);
+}
+
+impl RowSink for RowIndex {
+    #[inline]
+    fn row(&mut self, _: &Metadata, offset: u64, _: &[u8], _: usize, _: u64) {
+        self.push(offset);
+    }
+    fn len(&self) -> usize {
+        RowIndex::len(self)
+    }
+    fn fork(&self, bytes: usize) -> Self {
+        // Real logs average well over 32 bytes a row; a wrong guess only costs a regrowth.
+        RowIndex::with_capacity(bytes / 32)
+    }
+    fn append(&mut self, other: Self) {
+        RowIndex::append(self, other);
+    }
+}
+
+/// Counts rows ([`summarize`]).
 #[derive(Default)]
-struct Collected {
-    index: RowIndex,
+struct RowCount(usize);
+
+impl RowSink for RowCount {
+    #[inline]
+    fn row(&mut self, _: &Metadata, _: u64, _: &[u8], _: usize, _: u64) {
+        self.0 += 1;
+    }
+    fn len(&self) -> usize {
+        self.0
+    }
+    fn fork(&self, _: usize) -> Self {
+        RowCount(0)
+    }
+    fn append(&mut self, other: Self) {
+        self.0 += other.0;
+    }
+}
+
+/// Folds rows into accumulators, one per contiguous part of the file ([`fold_rows`]).
+struct Fold<'f, T, I, F> {
+    init: &'f I,
+    fold: &'f F,
+    parts: Vec<T>,
+    rows: usize,
+}
+
+impl<T, I, F> RowSink for Fold<'_, T, I, F>
+where
+    T: Send,
+    I: Fn() -> T + Sync,
+    F: Fn(&mut T, &Row<'_>) + Sync,
+{
+    #[inline]
+    fn row(&mut self, meta: &Metadata, offset: u64, data: &[u8], sub: usize, timestamp: u64) {
+        let row = Row {
+            timestamp,
+            offset,
+            data,
+            subscription: &meta.subscriptions[sub],
+            schema: &meta.schema,
+        };
+        if let Some(acc) = self.parts.last_mut() {
+            (self.fold)(acc, &row);
+        }
+        self.rows += 1;
+    }
+    fn len(&self) -> usize {
+        self.rows
+    }
+    fn fork(&self, _: usize) -> Self {
+        Fold {
+            init: self.init,
+            fold: self.fold,
+            parts: vec![(self.init)()],
+            rows: 0,
+        }
+    }
+    fn append(&mut self, other: Self) {
+        self.rows += other.rows;
+        self.parts.extend(other.parts);
+        // Rows after the appended part start a new accumulator, keeping file order.
+        self.parts.push((self.init)());
+    }
+}
+
+/// What walking (part of) a file collects besides the metadata.
+struct Collected<S> {
+    sink: S,
     other_timestamps: Vec<(usize, u64)>,
     logged: Vec<LoggedMessage>,
     changes: Vec<ParameterChange>,
@@ -186,7 +264,20 @@ enum Walked {
 /// Below this many bytes of data a file is read on one thread.
 const PARALLEL_MIN_LEN: usize = 8 << 20;
 
-impl Collected {
+impl<S: RowSink> Collected<S> {
+    fn new(sink: S) -> Collected<S> {
+        Collected {
+            sink,
+            other_timestamps: Vec::new(),
+            logged: Vec::new(),
+            changes: Vec::new(),
+            dropouts: Vec::new(),
+            sync_offsets: Vec::new(),
+            diagnostics: Vec::new(),
+            max_timestamp: 0,
+        }
+    }
+
     /// Walks from the walker's position until the next message starts at or after `limit`.
     /// A worker (`worker`) takes only rows, sync, logged strings, dropouts and parameter
     /// changes, and stops before anything else, which the sequential walk then reads.
@@ -203,7 +294,13 @@ impl Collected {
                 return Ok(Walked::Limit);
             }
             if let Some(row) = walker.fast_row(data, 0) {
-                self.index.push(row.offset);
+                self.sink.row(
+                    &walker.meta,
+                    row.offset,
+                    &data[row.data],
+                    row.sub,
+                    row.timestamp,
+                );
                 self.max_timestamp = self.max_timestamp.max(row.timestamp);
                 continue;
             }
@@ -218,7 +315,9 @@ impl Collected {
             }
             match walker.step(data, 0, true)? {
                 Step::Applied {
-                    offset, applied, ..
+                    offset,
+                    applied,
+                    payload,
                 } => match applied {
                     Applied::Sync => self.sync_offsets.push(offset),
                     Applied::Logged(m) => self.logged.push(m),
@@ -234,9 +333,10 @@ impl Collected {
                         if walker.meta.subscriptions[sub].timestamp_type()
                             != Some(Primitive::UInt64)
                         {
-                            self.other_timestamps.push((self.index.len(), timestamp));
+                            self.other_timestamps.push((self.sink.len(), timestamp));
                         }
-                        self.index.push(offset);
+                        self.sink
+                            .row(&walker.meta, offset, &payload[2..], sub, timestamp);
                     }
                     Applied::Diagnostic(d) => self.diagnostics.push(d),
                 },
@@ -247,9 +347,9 @@ impl Collected {
 
     /// Appends a worker's part; `before` is the latest data timestamp before the part, which
     /// the part's dropouts and parameter changes are dated with when it is later than theirs.
-    fn append(&mut self, mut part: Collected, before: u64) {
-        let base = self.index.len();
-        self.index.append(part.index);
+    fn append(&mut self, mut part: Collected<S>, before: u64) {
+        let base = self.sink.len();
+        self.sink.append(part.sink);
         self.other_timestamps.extend(
             part.other_timestamps
                 .into_iter()
@@ -317,13 +417,13 @@ impl<'a> Log<'a> {
 
     fn from_bytes(bytes: Bytes<'a>) -> Result<Log<'a>, ReadError> {
         // Real logs average well over 32 bytes a row; a wrong guess only costs a regrowth.
-        let index = RowIndex::with_capacity(bytes.as_slice().len() / 32);
-        let (meta, mut all) = Log::collect(bytes.as_slice(), index)?;
-        all.index.shrink_to_fit();
+        let index = RowIndex::default().fork(bytes.as_slice().len());
+        let (meta, mut all) = collect(bytes.as_slice(), index)?;
+        all.sink.shrink_to_fit();
         Ok(Log {
             bytes,
             meta,
-            index: all.index,
+            index: all.sink,
             other_timestamps: all.other_timestamps,
             by_sub: std::sync::OnceLock::new(),
             logged: all.logged,
@@ -331,109 +431,6 @@ impl<'a> Log<'a> {
             dropouts: all.dropouts,
             sync_offsets: all.sync_offsets,
             diagnostics: all.diagnostics,
-        })
-    }
-
-    /// Walks a whole file, rows going to `index`.
-    fn collect(data: &[u8], index: RowIndex) -> Result<(Metadata, Collected), ReadError> {
-        let header = FileHeader::parse(data)?;
-        let mut walker = Walker::new(header);
-        let mut all = Collected {
-            index,
-            diagnostics: walker.meta.header_diagnostic().into_iter().collect(),
-            ..Collected::default()
-        };
-        // The definitions and the start of the data, where logs subscribe most topics, on
-        // this thread.
-        let prefix = (data.len() / 16).min(32 << 20) as u64;
-        all.walk(&mut walker, data, prefix, false)?;
-        Log::walk_rest(&mut all, &mut walker, data)?;
-        Ok((walker.meta, all))
-    }
-
-    /// Reads the rest of the file, in parts on several threads when it is large.
-    ///
-    /// Each extra thread starts at a boundary beyond doubt (a chain of strongly plausible
-    /// messages) with a copy of the walker, and reads only messages that cannot change how
-    /// later ones are read. Its part is used only if this thread's own walk lands exactly on
-    /// that boundary with the state the copy had; otherwise this thread reads the part itself.
-    /// The result is the same as a sequential read either way.
-    fn walk_rest(all: &mut Collected, walker: &mut Walker, data: &[u8]) -> Result<(), ReadError> {
-        let threads = std::thread::available_parallelism()
-            .map_or(1, usize::from)
-            .min(8);
-        let start = walker.framer.pos() as usize;
-        let rest = data.len().saturating_sub(start);
-        if threads < 2
-            || rest < PARALLEL_MIN_LEN
-            || walker.framer.has_segments()
-            || walker.framer.is_busy()
-        {
-            all.walk(walker, data, u64::MAX, false)?;
-            return Ok(());
-        }
-        let mut bounds: Vec<usize> = (1..threads)
-            .filter_map(|k| {
-                walker
-                    .framer
-                    .find_boundary(data, start + rest * k / threads, 1 << 20, 4)
-            })
-            .collect();
-        bounds.sort_unstable();
-        bounds.dedup();
-        bounds.push(data.len());
-        let snapshot = walker.clone();
-        let counting = all.index.counting;
-        std::thread::scope(|scope| -> Result<(), ReadError> {
-            let workers: Vec<_> = bounds
-                .windows(2)
-                .map(|w| {
-                    let (from, to) = (w[0], w[1]);
-                    let mut copy = snapshot.clone();
-                    scope.spawn(move || {
-                        copy.framer.resume_at(from as u64, None);
-                        let index = if counting {
-                            RowIndex::counting()
-                        } else {
-                            RowIndex::with_capacity((to - from) / 32)
-                        };
-                        let mut part = Collected {
-                            index,
-                            ..Collected::default()
-                        };
-                        let walked = part.walk(&mut copy, data, to as u64, true);
-                        (walked.map(|_| ()), copy, part)
-                    })
-                })
-                .collect();
-            let mut limit = bounds[0] as u64;
-            for worker in workers {
-                all.walk(walker, data, limit, false)?;
-                let (walked, copy, part) = worker.join().expect("worker threads do not panic");
-                walked?;
-                let usable = walker.framer.pos() == limit
-                    && !walker.framer.is_busy()
-                    && walker.epoch == snapshot.epoch;
-                let next = bounds
-                    .iter()
-                    .copied()
-                    .find(|&b| b as u64 > limit)
-                    .unwrap_or(data.len()) as u64;
-                if usable {
-                    let before = walker.meta.last_timestamp();
-                    let dropped: u64 = part.dropouts.iter().map(|d| u64::from(d.duration_ms)).sum();
-                    walker
-                        .meta
-                        .absorb(part.max_timestamp, part.sync_offsets.len() as u64, dropped);
-                    walker
-                        .framer
-                        .resume_at(copy.framer.pos(), copy.framer.prev());
-                    all.append(part, before);
-                }
-                limit = next;
-            }
-            all.walk(walker, data, u64::MAX, false)?;
-            Ok(())
         })
     }
 
@@ -727,14 +724,154 @@ pub struct Summary {
 /// assert_eq!((summary.rows, summary.diagnostics.len()), (1, 0));
 /// ```
 pub fn summarize(bytes: &[u8]) -> Result<Summary, ReadError> {
-    let (metadata, all) = Log::collect(bytes, RowIndex::counting())?;
-    Ok(Summary {
+    let (metadata, all) = collect(bytes, RowCount::default())?;
+    Ok(summary(metadata, all))
+}
+
+fn summary<S: RowSink>(metadata: Metadata, all: Collected<S>) -> Summary {
+    Summary {
         metadata,
-        rows: all.index.len(),
+        rows: all.sink.len(),
         logged_messages: all.logged,
         parameter_changes: all.changes,
         dropouts: all.dropouts,
         sync_offsets: all.sync_offsets,
         diagnostics: all.diagnostics,
+    }
+}
+
+/// Walks a whole file as [`summarize`] does and folds every row into an accumulator as it is
+/// found: the fastest way through every row, as it reads the file once and, for large files,
+/// on all cores. Each thread folds a contiguous part of the file into its own accumulator,
+/// made by `init`; the accumulators come back in file order, so combining them in that order
+/// gives the same result on every run. The rows are exactly those [`Log::data`] yields.
+///
+/// ```
+/// # use ulog_runtime::read::{fold_rows, FileHeader, Message};
+/// # let mut bytes = FileHeader { version: 1, start_timestamp: 0 }.to_bytes().to_vec();
+/// # Message::Format(b"t:uint64_t timestamp;float x;").encode(&mut bytes).unwrap();
+/// # Message::Subscribe { multi_id: 0, msg_id: 0, name: b"t" }.encode(&mut bytes).unwrap();
+/// # for i in 0..3u64 {
+/// #     let mut row = i.to_le_bytes().to_vec();
+/// #     row.extend_from_slice(&(i as f32).to_le_bytes());
+/// #     Message::Data { msg_id: 0, data: &row }.encode(&mut bytes).unwrap();
+/// # }
+/// // Sum of every leaf of every row.
+/// let (summary, parts) = fold_rows(&bytes, || 0.0f64, |sum, row| {
+///     row.for_each_leaf(|v| *sum += v.as_f64());
+/// })
+/// .unwrap();
+/// assert_eq!((summary.rows, parts.iter().sum::<f64>()), (3, 6.0));
+/// ```
+pub fn fold_rows<T, I, F>(bytes: &[u8], init: I, fold: F) -> Result<(Summary, Vec<T>), ReadError>
+where
+    T: Send,
+    I: Fn() -> T + Sync,
+    F: Fn(&mut T, &Row<'_>) + Sync,
+{
+    let sink = Fold {
+        init: &init,
+        fold: &fold,
+        parts: vec![init()],
+        rows: 0,
+    };
+    let (metadata, mut all) = collect(bytes, sink)?;
+    let parts = std::mem::take(&mut all.sink.parts);
+    Ok((summary(metadata, all), parts))
+}
+
+/// Walks a whole file, rows going to `sink`.
+fn collect<S: RowSink>(data: &[u8], sink: S) -> Result<(Metadata, Collected<S>), ReadError> {
+    let header = FileHeader::parse(data)?;
+    let mut walker = Walker::new(header);
+    let mut all = Collected::new(sink);
+    all.diagnostics.extend(walker.meta.header_diagnostic());
+    // The definitions and the start of the data, where logs subscribe most topics, on
+    // this thread.
+    let prefix = (data.len() / 16).min(32 << 20) as u64;
+    all.walk(&mut walker, data, prefix, false)?;
+    walk_rest(&mut all, &mut walker, data)?;
+    Ok((walker.meta, all))
+}
+
+/// Reads the rest of the file, in parts on several threads when it is large.
+///
+/// Each extra thread starts at a boundary beyond doubt (a chain of strongly plausible
+/// messages) with a copy of the walker, and reads only messages that cannot change how
+/// later ones are read. Its part is used only if this thread's own walk lands exactly on
+/// that boundary with the state the copy had; otherwise this thread reads the part itself.
+/// The result is the same as a sequential read either way.
+fn walk_rest<S: RowSink>(
+    all: &mut Collected<S>,
+    walker: &mut Walker,
+    data: &[u8],
+) -> Result<(), ReadError> {
+    let threads = std::thread::available_parallelism()
+        .map_or(1, usize::from)
+        .min(8);
+    let start = walker.framer.pos() as usize;
+    let rest = data.len().saturating_sub(start);
+    if threads < 2
+        || rest < PARALLEL_MIN_LEN
+        || walker.framer.has_segments()
+        || walker.framer.is_busy()
+    {
+        all.walk(walker, data, u64::MAX, false)?;
+        return Ok(());
+    }
+    let mut bounds: Vec<usize> = (1..threads)
+        .filter_map(|k| {
+            walker
+                .framer
+                .find_boundary(data, start + rest * k / threads, 1 << 20, 4)
+        })
+        .collect();
+    bounds.sort_unstable();
+    bounds.dedup();
+    bounds.push(data.len());
+    let snapshot = walker.clone();
+    std::thread::scope(|scope| -> Result<(), ReadError> {
+        let workers: Vec<_> = bounds
+            .windows(2)
+            .map(|w| {
+                let (from, to) = (w[0], w[1]);
+                let mut copy = snapshot.clone();
+                let sink = all.sink.fork(to - from);
+                scope.spawn(move || {
+                    copy.framer.resume_at(from as u64, None);
+                    let mut part = Collected::new(sink);
+                    let walked = part.walk(&mut copy, data, to as u64, true);
+                    (walked.map(|_| ()), copy, part)
+                })
+            })
+            .collect();
+        let mut limit = bounds[0] as u64;
+        for worker in workers {
+            all.walk(walker, data, limit, false)?;
+            let (walked, copy, part) = worker.join().expect("worker threads do not panic");
+            walked?;
+            let usable = walker.framer.pos() == limit
+                && !walker.framer.is_busy()
+                && walker.epoch == snapshot.epoch;
+            let next = bounds
+                .iter()
+                .copied()
+                .find(|&b| b as u64 > limit)
+                .unwrap_or(data.len()) as u64;
+            if usable {
+                let before = walker.meta.last_timestamp();
+                let dropped: u64 = part.dropouts.iter().map(|d| u64::from(d.duration_ms)).sum();
+                walker
+                    .meta
+                    .absorb(part.max_timestamp, part.sync_offsets.len() as u64, dropped);
+                walker
+                    .framer
+                    .resume_at(copy.framer.pos(), copy.framer.prev());
+                all.append(part, before);
+            }
+            limit = next;
+        }
+        all.walk(walker, data, u64::MAX, false)?;
+        Ok(())
     })
 }

@@ -8,7 +8,7 @@ mod message;
 mod metadata;
 mod stream;
 
-pub use log::{DataRows, Log, Rows, Summary, summarize};
+pub use log::{DataRows, Log, Rows, Summary, fold_rows, summarize};
 pub use message::{
     FLAG_BITS_LEN, FileHeader, FlagBits, HEADER_LEN, KNOWN_VERSION, KeyValue, MAGIC,
     MESSAGE_HEADER_LEN, MalformedMessage, Message, MessageTooLarge, MessageType, SYNC_MAGIC,
