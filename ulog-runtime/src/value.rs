@@ -331,6 +331,8 @@ pub struct RowPlan {
     root: FormatId,
     runs: Vec<LeafRun>,
     leaves: usize,
+    /// Bytes a row needs for all its leaves.
+    need: usize,
 }
 
 impl RowPlan {
@@ -359,7 +361,15 @@ impl RowPlan {
                 primitive,
             });
         });
-        RowPlan { root, runs, leaves }
+        let need = runs.last().map_or(0, |r| {
+            r.offset as usize + r.count as usize * r.primitive.size()
+        });
+        RowPlan {
+            root,
+            runs,
+            leaves,
+            need,
+        }
     }
 
     /// Checks that a format can be decoded dynamically (it has a layout, not nested too
@@ -394,12 +404,9 @@ impl RowPlan {
     /// `false` (having visited nothing) if `row` is shorter than the leaves need.
     #[inline]
     pub fn for_each_leaf(&self, row: &[u8], mut f: impl FnMut(Scalar)) -> bool {
-        if let Some(last) = self.runs.last() {
-            let end = last.offset as usize + last.count as usize * last.primitive.size();
-            if row.len() < end {
-                return false;
-            }
-        }
+        let Some(row) = row.get(..self.need) else {
+            return false;
+        };
         for run in &self.runs {
             let start = run.offset as usize;
             let n = run.count as usize;

@@ -788,7 +788,7 @@ fn collect<S: RowSink>(data: &[u8], sink: S) -> Result<(Metadata, Collected<S>),
     all.diagnostics.extend(walker.meta.header_diagnostic());
     // The definitions and the start of the data, where logs subscribe most topics, on
     // this thread.
-    let prefix = (data.len() / 16).min(32 << 20) as u64;
+    let prefix = (data.len() / 64).min(8 << 20) as u64;
     all.walk(&mut walker, data, prefix, false)?;
     walk_rest(&mut all, &mut walker, data)?;
     Ok((walker.meta, all))
@@ -823,7 +823,7 @@ fn walk_rest<S: RowSink>(
         .filter_map(|k| {
             walker
                 .framer
-                .find_boundary(data, start + rest * k / threads, 1 << 20, 4)
+                .find_boundary(data, (data.len() * k / threads).max(start), 1 << 20, 4)
         })
         .collect();
     bounds.sort_unstable();
