@@ -92,6 +92,15 @@ fn param_matches(json: &Json, v: ParamValue) -> bool {
     }
 }
 
+/// An oracle array of unsigned integers.
+fn u64s(j: &Json) -> Vec<u64> {
+    j.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_u64().unwrap())
+        .collect()
+}
+
 fn check_file(path: &Path, o: &Json) -> Vec<String> {
     let mut d = Diffs::default();
     let log = Log::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
@@ -130,12 +139,7 @@ fn check_file(path: &Path, o: &Json) -> Vec<String> {
     while offsets.last() == Some(&0) {
         offsets.pop();
     }
-    let oracle_offsets: Vec<u64> = p["appended_offsets"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_u64().unwrap())
-        .collect();
+    let oracle_offsets = u64s(&p["appended_offsets"]);
     d.eq("appended_offsets", offsets, oracle_offsets);
     d.eq(
         "has_data_appended",
@@ -420,12 +424,7 @@ fn check_file(path: &Path, o: &Json) -> Vec<String> {
         .collect();
     missing.sort();
     missing.dedup();
-    let theirs: Vec<u64> = p["missing_message_ids"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_u64().unwrap())
-        .collect();
+    let theirs = u64s(&p["missing_message_ids"]);
     d.eq("missing_message_ids", missing, theirs);
 
     // Subscriptions with data, rows pyulog cannot see set aside.

@@ -49,6 +49,19 @@ fn close(a: f64, b: f64) -> bool {
     a == b || (a - b).abs() <= 1e-9 * a.abs().max(b.abs())
 }
 
+/// The same rows and leaves, overall and per topic; the sums may differ in the last bits,
+/// being added in another order (rows split between threads).
+fn same_scan(a: &Scan, b: &Scan) -> bool {
+    let same =
+        |a: &Totals, b: &Totals| a.rows == b.rows && a.leaves == b.leaves && close(a.sum, b.sum);
+    same(&a.all, &b.all)
+        && a.topics.len() == b.topics.len()
+        && a.topics
+            .iter()
+            .zip(&b.topics)
+            .all(|(x, y)| x.0 == y.0 && same(x.1, y.1))
+}
+
 #[test]
 fn scan_figures_equal_pyulogs() {
     let files = corpus_files();
@@ -93,32 +106,15 @@ fn scan_figures_equal_pyulogs() {
         compared += 1;
         let log = Log::from_slice(&bytes).unwrap();
         let scan = Scan::log(&log);
-        // The same rows and leaves; the sums may differ in the last bits, being added in
-        // another order (rows are split between threads).
         let streamed = Scan::stream(&bytes[..]).unwrap();
         let one_pass = Scan::bytes(&bytes).unwrap();
-        let same = |a: &Totals, b: &Totals| {
-            a.rows == b.rows && a.leaves == b.leaves && close(a.sum, b.sum)
-        };
         assert!(
-            same(&one_pass.all, &scan.all)
-                && one_pass.topics.len() == scan.topics.len()
-                && one_pass
-                    .topics
-                    .iter()
-                    .zip(&scan.topics)
-                    .all(|(a, b)| a.0 == b.0 && same(a.1, b.1)),
+            same_scan(&one_pass, &scan),
             "{}: one-pass and indexed scans differ",
             short_name(path)
         );
         assert!(
-            same(&streamed.all, &scan.all)
-                && streamed.topics.len() == scan.topics.len()
-                && streamed
-                    .topics
-                    .iter()
-                    .zip(&scan.topics)
-                    .all(|(a, b)| a.0 == b.0 && same(a.1, b.1)),
+            same_scan(&streamed, &scan),
             "{}: mmap and stream scans differ",
             short_name(path)
         );
