@@ -21,10 +21,12 @@ mod error;
 pub mod read;
 pub mod schema;
 pub mod value;
+pub mod write;
 
 pub use error::{Diagnostic, DiagnosticKind, ReadError};
 pub use read::{Event, Log, Row, StreamReader};
 pub use value::{Scalar, Value};
+pub use write::{WriteError, Writer, WriterOptions};
 
 /// The README's examples, compiled as doctests.
 #[cfg(doctest)]

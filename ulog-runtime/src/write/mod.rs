@@ -1,0 +1,489 @@
+//! Writing ULog files (format version 1): header and flag bits, formats (each once), info,
+//! multi info, parameters and defaults, subscriptions, data rows, logged and tagged strings,
+//! sync and dropout messages, and appending to an existing file.
+//!
+//! Every call checks its input before writing a byte, so misuse is an error value and the file
+//! stays valid; every message is written with one `write_all`, so a file cut by a crash reads
+//! back up to its last complete message.
+
+use std::io::{self, Write};
+
+use crate::read::ParamValue;
+use crate::read::{
+    FLAG_BITS_LEN, FileHeader, FlagBits, HEADER_LEN, KeyValue, Message, MessageTooLarge,
+};
+use crate::schema::{Format, FormatError, FormatId, LayoutError, Primitive, Redefinition, Schema};
+use crate::value::{Scalar, Value};
+
+#[cfg(test)]
+mod tests;
+
+/// Why a write was refused (nothing was written) or failed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum WriteError {
+    /// Writing to the output failed.
+    #[error("I/O error: {0}")]
+    Io(#[from] io::Error),
+    /// A format string that does not follow the grammar.
+    #[error("invalid format `{text}`: {error}")]
+    InvalidFormat {
+        /// The format string.
+        text: String,
+        /// Why.
+        error: FormatError,
+    },
+    /// A second, different format under a name already written.
+    #[error(transparent)]
+    Redefinition(#[from] Redefinition),
+    /// A subscription to a format that was never written.
+    #[error("no format named `{0}` was written; write it (and the formats it nests) first")]
+    UnknownFormat(String),
+    /// A subscription to a format whose layout cannot be resolved (a nested type missing...).
+    #[error("format `{format}` cannot be subscribed: {error}")]
+    Layout {
+        /// The format.
+        format: String,
+        /// Why.
+        error: LayoutError,
+    },
+    /// Data for a subscription this writer did not make.
+    #[error("no subscription with msg_id {0}")]
+    NotSubscribed(u16),
+    /// A data row whose length does not fit its format.
+    #[error("`{topic}` rows are {min}..={max} bytes, got {len}")]
+    RowSize {
+        /// The topic.
+        topic: String,
+        /// The row's length.
+        len: usize,
+        /// Size without trailing padding.
+        min: usize,
+        /// Full size.
+        max: usize,
+    },
+    /// All 65,536 `msg_id`s are used.
+    #[error("all 65536 msg_ids are used")]
+    TooManySubscriptions,
+    /// A message or key too large for its length field.
+    #[error(transparent)]
+    TooLarge(#[from] MessageTooLarge),
+    /// A key or value that cannot be written.
+    #[error("invalid `{key}`: {reason}")]
+    InvalidValue {
+        /// The key.
+        key: String,
+        /// Why.
+        reason: String,
+    },
+    /// A default parameter in a file whose flag bits do not announce them.
+    #[error(
+        "default parameters need `WriterOptions::default_parameters` (the flag bits announce them)"
+    )]
+    DefaultParametersNotDeclared,
+    /// Appending to a file that cannot take appended data.
+    #[error("cannot append: {0}")]
+    CannotAppend(String),
+}
+
+/// How a new file starts.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct WriterOptions {
+    /// Start of logging, in microseconds (the header's timestamp).
+    pub start_timestamp: u64,
+    /// Whether the file will hold default parameters (`Q`): sets the compat flag bit.
+    pub default_parameters: bool,
+}
+
+/// A subscription made by [`Writer::subscribe`]: the `msg_id` its rows carry.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct SubscriptionId(pub u16);
+
+#[derive(Debug, Clone)]
+struct Subscribed {
+    topic: String,
+    min: usize,
+    max: usize,
+}
+
+/// Writes a ULog file to any `io::Write` (wrap files in `io::BufWriter`).
+///
+/// ```
+/// use ulog_runtime::write::{Writer, WriterOptions};
+/// let mut w = Writer::new(Vec::new(), WriterOptions { start_timestamp: 1_000, ..Default::default() })?;
+/// w.format("t:uint64_t timestamp;float x;")?;
+/// w.info("sys_name", &ulog_runtime::Value::String("rover".into()))?;
+/// let t = w.subscribe("t", 0)?;
+/// let mut row = 2_000u64.to_le_bytes().to_vec();
+/// row.extend_from_slice(&1.5f32.to_le_bytes());
+/// w.data(t, &row)?;
+/// let bytes = w.into_inner();
+/// let log = ulog_runtime::Log::from_slice(&bytes).unwrap();
+/// assert_eq!(log.row_count(), 1);
+/// # Ok::<(), ulog_runtime::write::WriteError>(())
+/// ```
+#[derive(Debug)]
+pub struct Writer<W: Write> {
+    out: W,
+    schema: Schema,
+    subscriptions: Vec<Option<Subscribed>>,
+    next_msg_id: u32,
+    default_parameters: bool,
+    buf: Vec<u8>,
+}
+
+impl<W: Write> Writer<W> {
+    /// Starts a file: the 16-byte header (version 1) and the flag bits.
+    pub fn new(out: W, options: WriterOptions) -> Result<Writer<W>, WriteError> {
+        let mut w = Writer {
+            out,
+            schema: Schema::new(),
+            subscriptions: Vec::new(),
+            next_msg_id: 0,
+            default_parameters: options.default_parameters,
+            buf: Vec::with_capacity(256),
+        };
+        let header = FileHeader {
+            version: 1,
+            start_timestamp: options.start_timestamp,
+        };
+        w.out.write_all(&header.to_bytes())?;
+        let mut bits = FlagBits::default();
+        if options.default_parameters {
+            bits.compat[0] |= FlagBits::COMPAT_DEFAULT_PARAMETERS;
+        }
+        w.put(Message::FlagBits(bits))?;
+        Ok(w)
+    }
+
+    /// The output.
+    pub fn get_ref(&self) -> &W {
+        &self.out
+    }
+
+    /// Flushes and returns the output.
+    pub fn into_inner(mut self) -> W {
+        let _ = self.out.flush();
+        self.out
+    }
+
+    /// Flushes the output.
+    pub fn flush(&mut self) -> Result<(), WriteError> {
+        Ok(self.out.flush()?)
+    }
+
+    /// The formats written so far.
+    pub fn schema(&self) -> &Schema {
+        &self.schema
+    }
+
+    fn put(&mut self, m: Message<'_>) -> Result<(), WriteError> {
+        self.buf.clear();
+        m.encode(&mut self.buf)?;
+        self.out.write_all(&self.buf)?;
+        Ok(())
+    }
+
+    /// Writes a format definition (`F`) from its string, e.g.
+    /// `vehicle_attitude:uint64_t timestamp;float[4] q;`. A format already written with the
+    /// same definition is not written again; a different one under the same name is refused.
+    pub fn format(&mut self, text: &str) -> Result<FormatId, WriteError> {
+        let format = Format::parse(text).map_err(|error| WriteError::InvalidFormat {
+            text: text.to_owned(),
+            error,
+        })?;
+        self.write_format(format)
+    }
+
+    /// Writes a format definition (`F`); see [`Writer::format`].
+    pub fn write_format(&mut self, format: Format) -> Result<FormatId, WriteError> {
+        if let Some(id) = self.schema.id(&format.name) {
+            if *self.schema.format(id) == format {
+                return Ok(id);
+            }
+        }
+        let text = format.to_string();
+        let id = self.schema.insert(format)?;
+        self.put(Message::Format(text.as_bytes()))?;
+        Ok(id)
+    }
+
+    /// Writes an info value (`I`): text as `char[N]`, a scalar as its type, an array of one
+    /// basic type as `type[N]`. Keys are unique in a file; a later value replaces the earlier.
+    pub fn info(&mut self, key: &str, value: &Value) -> Result<(), WriteError> {
+        let (key_text, bytes) = key_value(key, value)?;
+        self.put(Message::Info(KeyValue {
+            key: key_text.as_bytes(),
+            value: &bytes,
+        }))
+    }
+
+    /// Writes one part of a multi info value (`M`); `continued` appends it to the previous
+    /// part of the same key.
+    pub fn multi_info(
+        &mut self,
+        key: &str,
+        value: &Value,
+        continued: bool,
+    ) -> Result<(), WriteError> {
+        let (key_text, bytes) = key_value(key, value)?;
+        self.put(Message::MultiInfo {
+            continued,
+            entry: KeyValue {
+                key: key_text.as_bytes(),
+                value: &bytes,
+            },
+        })
+    }
+
+    /// Writes a parameter (`P`): its initial value before the first subscription, a change
+    /// after.
+    pub fn parameter(&mut self, name: &str, value: ParamValue) -> Result<(), WriteError> {
+        let (key_text, bytes) = param_key_value(name, value)?;
+        self.put(Message::Parameter(KeyValue {
+            key: key_text.as_bytes(),
+            value: &bytes,
+        }))
+    }
+
+    /// Writes a default parameter (`Q`); `default_types` bit 0: system default, bit 1: default
+    /// of the current configuration (at least one set). The file must have been started with
+    /// [`WriterOptions::default_parameters`].
+    pub fn default_parameter(
+        &mut self,
+        name: &str,
+        value: ParamValue,
+        default_types: u8,
+    ) -> Result<(), WriteError> {
+        if !self.default_parameters {
+            return Err(WriteError::DefaultParametersNotDeclared);
+        }
+        if !(1..=3).contains(&default_types) {
+            return Err(WriteError::InvalidValue {
+                key: name.to_owned(),
+                reason: format!("default_types {default_types} must set bit 0, bit 1 or both"),
+            });
+        }
+        let (key_text, bytes) = param_key_value(name, value)?;
+        self.put(Message::DefaultParameter {
+            default_types,
+            entry: KeyValue {
+                key: key_text.as_bytes(),
+                value: &bytes,
+            },
+        })
+    }
+
+    /// Subscribes a written format (`A`) as instance `multi_id`; the format and the formats it
+    /// nests must have been written. `msg_id`s are given in increasing order from 0.
+    pub fn subscribe(&mut self, format: &str, multi_id: u8) -> Result<SubscriptionId, WriteError> {
+        let id = self
+            .schema
+            .id(format)
+            .ok_or_else(|| WriteError::UnknownFormat(format.to_owned()))?;
+        let layout = self.schema.layout(id).map_err(|error| WriteError::Layout {
+            format: format.to_owned(),
+            error,
+        })?;
+        let (min, max) = (layout.payload_size, layout.size);
+        let msg_id =
+            u16::try_from(self.next_msg_id).map_err(|_| WriteError::TooManySubscriptions)?;
+        self.put(Message::Subscribe {
+            multi_id,
+            msg_id,
+            name: format.as_bytes(),
+        })?;
+        self.next_msg_id += 1;
+        self.subscriptions.push(Some(Subscribed {
+            topic: format.to_owned(),
+            min,
+            max,
+        }));
+        Ok(SubscriptionId(msg_id))
+    }
+
+    /// Marks a subscription as no longer logged (`R`).
+    pub fn unsubscribe(&mut self, id: SubscriptionId) -> Result<(), WriteError> {
+        self.subscription(id)?;
+        self.put(Message::Unsubscribe { msg_id: id.0 })
+    }
+
+    fn subscription(&self, id: SubscriptionId) -> Result<&Subscribed, WriteError> {
+        self.subscriptions
+            .get(usize::from(id.0))
+            .and_then(Option::as_ref)
+            .ok_or(WriteError::NotSubscribed(id.0))
+    }
+
+    /// Writes a data row (`D`): the packed little-endian fields, with or without the trailing
+    /// padding.
+    pub fn data(&mut self, id: SubscriptionId, row: &[u8]) -> Result<(), WriteError> {
+        let sub = self.subscription(id)?;
+        if !(sub.min..=sub.max).contains(&row.len()) {
+            return Err(WriteError::RowSize {
+                topic: sub.topic.clone(),
+                len: row.len(),
+                min: sub.min,
+                max: sub.max,
+            });
+        }
+        self.put(Message::Data {
+            msg_id: id.0,
+            data: row,
+        })
+    }
+
+    /// Writes a logged string (`L`); `level` is the ASCII digit PX4 writes (`b'6'` for info).
+    pub fn log(&mut self, level: u8, timestamp: u64, text: &str) -> Result<(), WriteError> {
+        self.put(Message::Logging {
+            level,
+            tag: None,
+            timestamp,
+            text: text.as_bytes(),
+        })
+    }
+
+    /// Writes a tagged logged string (`C`).
+    pub fn log_tagged(
+        &mut self,
+        level: u8,
+        tag: u16,
+        timestamp: u64,
+        text: &str,
+    ) -> Result<(), WriteError> {
+        self.put(Message::Logging {
+            level,
+            tag: Some(tag),
+            timestamp,
+            text: text.as_bytes(),
+        })
+    }
+
+    /// Writes a sync message (`S`), which lets readers recover from corruption.
+    pub fn sync(&mut self) -> Result<(), WriteError> {
+        self.put(Message::Sync)
+    }
+
+    /// Writes a dropout (`O`) of `duration_ms` milliseconds.
+    pub fn dropout(&mut self, duration_ms: u16) -> Result<(), WriteError> {
+        self.put(Message::Dropout { duration_ms })
+    }
+}
+
+/// The key text and value bytes of an info value.
+fn key_value(key: &str, value: &Value) -> Result<(String, Vec<u8>), WriteError> {
+    let invalid = |reason: &str| WriteError::InvalidValue {
+        key: key.to_owned(),
+        reason: reason.to_owned(),
+    };
+    if key.is_empty() || !key.bytes().all(|c| c.is_ascii_graphic()) {
+        return Err(invalid("keys are visible ASCII characters, at least one"));
+    }
+    let mut bytes = Vec::new();
+    let ty = match value {
+        Value::String(s) => {
+            bytes.extend_from_slice(s.as_bytes());
+            format!("char[{}]", s.len())
+        }
+        Value::Scalar(s) => {
+            push_scalar(&mut bytes, *s);
+            s.primitive().to_string()
+        }
+        Value::Array(items) => {
+            let mut primitive = None;
+            for item in items {
+                let Value::Scalar(s) = item else {
+                    return Err(invalid("array values must be basic values"));
+                };
+                if *primitive.get_or_insert(s.primitive()) != s.primitive() {
+                    return Err(invalid("array values must all have one type"));
+                }
+                push_scalar(&mut bytes, *s);
+            }
+            format!("{}[{}]", primitive.unwrap_or(Primitive::UInt8), items.len())
+        }
+        Value::Struct(_) => return Err(invalid("info values are basic values, arrays or text")),
+    };
+    Ok((format!("{ty} {key}"), bytes))
+}
+
+fn param_key_value(name: &str, value: ParamValue) -> Result<(String, Vec<u8>), WriteError> {
+    let scalar = match value {
+        ParamValue::Int32(v) => Scalar::Int32(v),
+        ParamValue::Float(v) => Scalar::Float(v),
+    };
+    key_value(name, &Value::Scalar(scalar))
+}
+
+/// Appends a scalar's little-endian bytes.
+pub(crate) fn push_scalar(out: &mut Vec<u8>, s: Scalar) {
+    match s {
+        Scalar::Int8(v) => out.extend_from_slice(&v.to_le_bytes()),
+        Scalar::UInt8(v) => out.push(v),
+        Scalar::Int16(v) => out.extend_from_slice(&v.to_le_bytes()),
+        Scalar::UInt16(v) => out.extend_from_slice(&v.to_le_bytes()),
+        Scalar::Int32(v) => out.extend_from_slice(&v.to_le_bytes()),
+        Scalar::UInt32(v) => out.extend_from_slice(&v.to_le_bytes()),
+        Scalar::Int64(v) => out.extend_from_slice(&v.to_le_bytes()),
+        Scalar::UInt64(v) => out.extend_from_slice(&v.to_le_bytes()),
+        Scalar::Float(v) => out.extend_from_slice(&v.to_le_bytes()),
+        Scalar::Double(v) => out.extend_from_slice(&v.to_le_bytes()),
+        Scalar::Bool(v) => out.push(u8::from(v)),
+        Scalar::Char(v) => out.push(v),
+    }
+}
+
+impl Writer<std::fs::File> {
+    /// Opens an existing version-1 log to append data to it: sets the DATA_APPENDED flag and
+    /// the next free appended offset (the current end of the file), then continues with the
+    /// file's formats and subscriptions (new ones get the next `msg_id`s).
+    pub fn append(path: impl AsRef<std::path::Path>) -> Result<Writer<std::fs::File>, WriteError> {
+        use std::io::{Read, Seek, SeekFrom};
+        let mut file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(path)?;
+        let mut bytes = Vec::new();
+        file.read_to_end(&mut bytes)?;
+        let log =
+            crate::Log::from_slice(&bytes).map_err(|e| WriteError::CannotAppend(e.to_string()))?;
+        let mut bits = *log.flag_bits().ok_or_else(|| {
+            WriteError::CannotAppend("the file has no flag bits message (version 0)".into())
+        })?;
+        let slot = bits
+            .appended_offsets
+            .iter()
+            .position(|&o| o == 0)
+            .ok_or_else(|| WriteError::CannotAppend("all 3 appended offsets are used".into()))?;
+        bits.incompat[0] |= FlagBits::INCOMPAT_DATA_APPENDED;
+        bits.appended_offsets[slot] = bytes.len() as u64;
+        file.seek(SeekFrom::Start((HEADER_LEN + 3) as u64))?;
+        file.write_all(&bits.to_bytes()[..FLAG_BITS_LEN])?;
+        file.seek(SeekFrom::End(0))?;
+        let mut schema = Schema::new();
+        for f in log.metadata().schema().formats() {
+            schema.insert(f.clone())?;
+        }
+        let mut subscriptions: Vec<Option<Subscribed>> = Vec::new();
+        for s in log.subscriptions() {
+            let i = usize::from(s.msg_id);
+            if subscriptions.len() <= i {
+                subscriptions.resize(i + 1, None);
+            }
+            subscriptions[i] = s.payload_sizes().map(|(min, max)| Subscribed {
+                topic: s.name.clone(),
+                min,
+                max,
+            });
+        }
+        let next_msg_id = subscriptions.len() as u32;
+        Ok(Writer {
+            out: file,
+            schema,
+            subscriptions,
+            next_msg_id,
+            default_parameters: bits.has_default_parameters(),
+            buf: Vec::with_capacity(256),
+        })
+    }
+}
