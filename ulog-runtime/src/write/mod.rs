@@ -197,10 +197,10 @@ impl<W: Write> Writer<W> {
 
     /// Writes a format definition (`F`); see [`Writer::format`].
     pub fn write_format(&mut self, format: Format) -> Result<FormatId, WriteError> {
-        if let Some(id) = self.schema.id(&format.name) {
-            if *self.schema.format(id) == format {
-                return Ok(id);
-            }
+        if let Some(id) = self.schema.id(&format.name)
+            && *self.schema.format(id) == format
+        {
+            return Ok(id);
         }
         let text = format.to_string();
         let id = self.schema.insert(format)?;
