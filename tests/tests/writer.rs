@@ -241,7 +241,7 @@ fn interop_file() -> Vec<u8> {
             for e in 0..2i32 {
                 r.extend_from_slice(&(1_000 * e + i as i32 - 7).to_le_bytes());
                 r.extend_from_slice(&(14.8f32 + e as f32 * 0.1).to_le_bytes());
-                r.push(u8::from((i + e as u64) % 2 == 0));
+                r.push(u8::from((i + e as u64).is_multiple_of(2)));
                 r.extend_from_slice(b"e\x01z");
                 r.extend_from_slice(&(-(i as i16)).to_le_bytes());
                 r.extend_from_slice(&(i as i16 * 300).to_le_bytes());
@@ -255,7 +255,7 @@ fn interop_file() -> Vec<u8> {
         m.extend_from_slice(&(u16::MAX - i as u16).to_le_bytes());
         m.extend_from_slice(b"abcde");
         for v in [f32::NAN, f32::INFINITY, -0.0] {
-            m.extend_from_slice(&(if i % 2 == 0 { v } else { i as f32 }).to_le_bytes());
+            m.extend_from_slice(&(if i.is_multiple_of(2) { v } else { i as f32 }).to_le_bytes());
         }
         w.data(mix, &m).unwrap();
         if i == 10 {
