@@ -493,3 +493,22 @@ fn parallel_whole_file_reading_equals_sequential_streaming() {
         );
     }
 }
+
+/// The streaming reader's memory stays bounded by a few messages whatever the file size
+/// (here 24 MB, messages up to 17 KB).
+#[test]
+fn streaming_memory_is_bounded() {
+    let Some(clean) = cleans().iter().max_by_key(|c| c.bytes.len()) else {
+        assert!(!ulog_tests::under_ci(), "no clean corpus file");
+        return;
+    };
+    let big = examples::inflate(&clean.bytes, 24_000_000).unwrap();
+    let mut reader = StreamReader::new(&big[..]).unwrap();
+    let (mut rows, mut most) = (0, 0);
+    while let Some(event) = reader.next_event().unwrap() {
+        rows += usize::from(matches!(event, Event::Row(_)));
+        most = most.max(reader.buffered_capacity());
+    }
+    assert!(rows > 100_000);
+    assert!(most <= 512 * 1024, "the stream buffer grew to {most} bytes");
+}

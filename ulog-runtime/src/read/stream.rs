@@ -101,6 +101,12 @@ impl<R: Read> StreamReader<R> {
         })
     }
 
+    /// Bytes the reader holds for its window of the file: bounded by a few messages
+    /// (at most a few hundred kilobytes), whatever the file size.
+    pub fn buffered_capacity(&self) -> usize {
+        self.buf.capacity()
+    }
+
     /// Everything read so far but the data rows.
     pub fn metadata(&self) -> &Metadata {
         &self.walker.meta
