@@ -625,3 +625,26 @@ fn flag_bits_elsewhere_are_ignored() {
         }
     );
 }
+
+#[test]
+fn appended_offsets_near_the_end_of_u64_do_not_overflow() {
+    for offset in [u64::MAX, u64::MAX - 1, u64::MAX - 3, 1 << 63] {
+        let mut f = File::v1(0);
+        f.format("t:uint64_t timestamp;int16_t v;");
+        f.subscribe(0, 0, "t");
+        f.data(0, &row(1, 1));
+        let mut bits = FlagBits::default();
+        bits.incompat[0] = FlagBits::INCOMPAT_DATA_APPENDED;
+        bits.appended_offsets = [offset, 0, 0];
+        f.0[16 + 3..16 + 3 + FLAG_BITS_LEN].copy_from_slice(&bits.to_bytes());
+        let log = Log::from_slice(&f.0).unwrap();
+        assert_eq!(log.row_count(), 1);
+        assert_eq!(
+            log.diagnostics()[0].kind,
+            DiagnosticKind::BadAppendedOffset(offset)
+        );
+        let (rows, diags) = stream_rows(&f.0, 3);
+        assert_eq!(rows, log_rows(&log));
+        assert_eq!(&diags, log.diagnostics());
+    }
+}
