@@ -5,6 +5,10 @@
 //!   over any `io::Read`; both read every message type of format versions 0 and 1, recover
 //!   from corruption and report what they skipped as [`Diagnostic`]s.
 //! - [`value`]: dynamic values for rows of any format, and a fast leaf walk.
+//! - [`typed`]: Rust structs as ULog formats (`#[derive(ULog)]`), checked against a file's
+//!   own definitions once, then decoded by offset reads ([`Log::topic`]) and written
+//!   ([`Writer::topic`]).
+//! - [`write`]: a [`Writer`] of version-1 files.
 //!
 //! ```no_run
 //! # fn main() -> Result<(), ulog_runtime::ReadError> {
@@ -17,14 +21,23 @@
 //! # Ok(()) }
 //! ```
 
+// Lets `#[derive(ULog)]` output (which names `::ulog_runtime`) compile inside this crate too.
+extern crate self as ulog_runtime;
+
+#[doc(hidden)]
+pub mod __private;
 mod error;
 pub mod read;
 pub mod schema;
+pub mod typed;
 pub mod value;
 pub mod write;
 
 pub use error::{Diagnostic, DiagnosticKind, ReadError};
 pub use read::{Event, Log, Row, StreamReader};
+pub use typed::{Chars, Topic, TypedError, ULog};
+#[cfg(feature = "derive")]
+pub use ulog_derive::ULog;
 pub use value::{Scalar, Value};
 pub use write::{WriteError, Writer, WriterOptions};
 

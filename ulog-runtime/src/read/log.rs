@@ -480,6 +480,14 @@ impl<'a> Log<'a> {
                 .is_some_and(|s| std::ptr::eq(s, sub)),
             "the subscription belongs to this log"
         );
+        Rows {
+            log: self,
+            rows: self.row_numbers(sub.index).iter(),
+        }
+    }
+
+    /// The numbers (positions in [`Log::data`]) of the rows of the `index`-th subscription.
+    pub(crate) fn row_numbers(&self, index: usize) -> &[usize] {
         let by_sub = self.by_sub.get_or_init(|| {
             let mut by_sub = vec![Vec::new(); self.meta.subscriptions.len()];
             for (i, row) in self.data().enumerate() {
@@ -487,10 +495,7 @@ impl<'a> Log<'a> {
             }
             by_sub
         });
-        Rows {
-            log: self,
-            rows: by_sub[sub.index].iter(),
-        }
+        &by_sub[index]
     }
 
     /// Every data row of every subscription, in file order.
@@ -601,7 +606,7 @@ impl<'a> Log<'a> {
         }
     }
 
-    fn row(&self, i: usize) -> Row<'_> {
+    pub(crate) fn row(&self, i: usize) -> Row<'_> {
         self.row_at(i, self.index.get(i).0)
     }
 }

@@ -13,6 +13,7 @@ use crate::read::{
     FLAG_BITS_LEN, FileHeader, FlagBits, HEADER_LEN, KeyValue, Message, MessageTooLarge,
 };
 use crate::schema::{Format, FormatError, FormatId, LayoutError, Primitive, Redefinition, Schema};
+use crate::typed::{Topic, ULog, encode_row};
 use crate::value::{Scalar, Value};
 
 #[cfg(test)]
@@ -99,6 +100,43 @@ pub struct WriterOptions {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct SubscriptionId(pub u16);
 
+/// A subscription of a typed topic made by [`Writer::topic`]; [`Writer::write`] takes rows of
+/// type `T` for it.
+pub struct TypedSubscription<T> {
+    id: SubscriptionId,
+    multi_id: u8,
+    _type: std::marker::PhantomData<fn(&T)>,
+}
+
+impl<T> TypedSubscription<T> {
+    /// The `msg_id` its rows carry.
+    pub fn id(&self) -> SubscriptionId {
+        self.id
+    }
+
+    /// The instance number.
+    pub fn multi_id(&self) -> u8 {
+        self.multi_id
+    }
+}
+
+impl<T> Clone for TypedSubscription<T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<T> Copy for TypedSubscription<T> {}
+
+impl<T> std::fmt::Debug for TypedSubscription<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("TypedSubscription")
+            .field("id", &self.id)
+            .field("multi_id", &self.multi_id)
+            .finish()
+    }
+}
+
 #[derive(Debug, Clone)]
 struct Subscribed {
     topic: String,
@@ -130,6 +168,7 @@ pub struct Writer<W: Write> {
     next_msg_id: u32,
     default_parameters: bool,
     buf: Vec<u8>,
+    row: Vec<u8>,
 }
 
 impl<W: Write> Writer<W> {
@@ -142,6 +181,7 @@ impl<W: Write> Writer<W> {
             next_msg_id: 0,
             default_parameters: options.default_parameters,
             buf: Vec::with_capacity(256),
+            row: Vec::with_capacity(256),
         };
         let header = FileHeader {
             version: 1,
@@ -302,6 +342,66 @@ impl<W: Write> Writer<W> {
         Ok(SubscriptionId(msg_id))
     }
 
+    /// Writes the formats of a [`ULog`] type (nested ones first, each once) without
+    /// subscribing it; [`Writer::topic`] does this itself.
+    pub fn formats_of<T: ULog>(&mut self) -> Result<FormatId, WriteError> {
+        let mut last = None;
+        for format in T::FORMAT.formats() {
+            last = Some(self.write_format(format)?);
+        }
+        Ok(last.expect("a format lists itself"))
+    }
+
+    /// Subscribes a typed topic as instance `multi_id`, writing its formats first (nested ones
+    /// included, each once per file). A different format already written under one of its
+    /// names is refused.
+    ///
+    /// ```
+    /// use ulog_runtime::{Chars, ULog, Writer, WriterOptions};
+    ///
+    /// #[derive(ULog, Clone, Copy)]
+    /// struct Cell { voltage: f32, #[ulog(padding)] _pad: [u8; 4] }
+    ///
+    /// #[derive(ULog)]
+    /// #[ulog(name = "battery_status")]
+    /// struct Battery { timestamp: u64, cells: [Cell; 2], id: Chars<4> }
+    ///
+    /// let mut w = Writer::new(Vec::new(), WriterOptions::default())?;
+    /// let first = w.topic::<Battery>(0)?;
+    /// let second = w.topic::<Battery>(1)?;
+    /// let cells = [Cell { voltage: 3.9, _pad: [0; 4] }; 2];
+    /// w.write(&first, &Battery { timestamp: 1, cells, id: Chars::new("A").unwrap() })?;
+    /// w.write(&second, &Battery { timestamp: 2, cells, id: Chars::new("B").unwrap() })?;
+    /// let log = ulog_runtime::Log::from_vec(w.into_inner())?;
+    /// let f = log.metadata().schema().get("battery_status").unwrap();
+    /// assert_eq!(f.to_string(), "battery_status:uint64_t timestamp;cell[2] cells;char[4] id;");
+    /// assert_eq!(log.topic::<Battery>()?.multi_ids(), [0, 1]);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn topic<T: Topic>(&mut self, multi_id: u8) -> Result<TypedSubscription<T>, WriteError> {
+        self.formats_of::<T>()?;
+        let id = self.subscribe(T::FORMAT.name, multi_id)?;
+        Ok(TypedSubscription {
+            id,
+            multi_id,
+            _type: std::marker::PhantomData,
+        })
+    }
+
+    /// Writes one typed data row (`D`), without its trailing padding as PX4 writes it.
+    pub fn write<T: Topic>(
+        &mut self,
+        sub: &TypedSubscription<T>,
+        value: &T,
+    ) -> Result<(), WriteError> {
+        let mut row = std::mem::take(&mut self.row);
+        row.clear();
+        encode_row(value, &mut row);
+        let result = self.data(sub.id, &row);
+        self.row = row;
+        result
+    }
+
     /// Marks a subscription as no longer logged (`R`).
     pub fn unsubscribe(&mut self, id: SubscriptionId) -> Result<(), WriteError> {
         self.subscription(id)?;
@@ -433,6 +533,17 @@ pub(crate) fn push_scalar(out: &mut Vec<u8>, s: Scalar) {
     }
 }
 
+impl Writer<io::BufWriter<std::fs::File>> {
+    /// Creates (or truncates) a file and starts it; see [`Writer::new`]. Call
+    /// [`Writer::flush`] (or drop the writer) when done.
+    pub fn create(
+        path: impl AsRef<std::path::Path>,
+        options: WriterOptions,
+    ) -> Result<Writer<io::BufWriter<std::fs::File>>, WriteError> {
+        Writer::new(io::BufWriter::new(std::fs::File::create(path)?), options)
+    }
+}
+
 impl Writer<std::fs::File> {
     /// Opens an existing version-1 log to append data to it: sets the DATA_APPENDED flag and
     /// the next free appended offset (the current end of the file), then continues with the
@@ -484,6 +595,7 @@ impl Writer<std::fs::File> {
             next_msg_id,
             default_parameters: bits.has_default_parameters(),
             buf: Vec::with_capacity(256),
+            row: Vec::with_capacity(256),
         })
     }
 }

@@ -1,0 +1,164 @@
+//! The rules a ULog struct must follow that the type system cannot check, one per function.
+//! Field types are checked by the runtime's trait impls, not here.
+
+use std::collections::HashMap;
+
+use syn::{Type, TypeArray};
+
+use crate::Errors;
+use crate::ast::{FieldInput, Input};
+
+/// Prefix the format grammar reserves for padding fields.
+const PADDING_PREFIX: &str = "_padding";
+
+/// The basic type names of the format grammar, which a format name may not take.
+const BASIC_TYPE_NAMES: [&str; 12] = [
+    "int8_t", "uint8_t", "int16_t", "uint16_t", "int32_t", "uint32_t", "int64_t", "uint64_t",
+    "float", "double", "bool", "char",
+];
+
+pub(crate) fn all(input: &Input<'_>, topic: &str, errors: &mut Errors) {
+    topic_name(input, topic, errors);
+    for field in &input.fields {
+        field_name(field, errors);
+        padding_field(field, errors);
+        array_dimensions(field.ty, errors);
+        timestamp_type(field, errors);
+    }
+    unique_names(input, errors);
+}
+
+/// A topic name follows the format grammar: `a-z A-Z 0-9 _ - /`, not a basic type name.
+fn topic_name(input: &Input<'_>, topic: &str, errors: &mut Errors) {
+    let span = input
+        .attrs
+        .name
+        .as_ref()
+        .map_or(input.ident.span(), |n| n.span);
+    let bad = topic
+        .chars()
+        .find(|c| !(c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '/')));
+    let message = if topic.is_empty() {
+        "a ULog topic name cannot be empty".to_owned()
+    } else if let Some(c) = bad {
+        format!(
+            "invalid ULog topic name `{topic}`: {c:?} is not allowed \
+             (allowed: a-z A-Z 0-9 _ - /)"
+        )
+    } else if BASIC_TYPE_NAMES.contains(&topic) {
+        format!("invalid ULog topic name `{topic}`: it is a basic type name")
+    } else {
+        return;
+    };
+    errors.push(syn::Error::new(span, message));
+}
+
+/// A field name follows the format grammar (`a-z A-Z 0-9 _`), and only padding fields use the
+/// padding prefix.
+fn field_name(field: &FieldInput<'_>, errors: &mut Errors) {
+    if field.attrs.padding.is_some() {
+        return;
+    }
+    let (name, span) = field.ulog_name();
+    if name.is_empty() {
+        errors.push(syn::Error::new(span, "a ULog field name cannot be empty"));
+    } else if let Some(c) = name
+        .chars()
+        .find(|c| !(c.is_ascii_alphanumeric() || *c == '_'))
+    {
+        errors.push(syn::Error::new(
+            span,
+            format!(
+                "invalid ULog field name `{name}`: {c:?} is not allowed (allowed: a-z A-Z 0-9 _); \
+                 use `#[ulog(rename = \"...\")]`"
+            ),
+        ));
+    } else if name.starts_with(PADDING_PREFIX) {
+        errors.push(syn::Error::new(
+            span,
+            format!(
+                "`{name}`: names starting with `{PADDING_PREFIX}` are padding in ULog; \
+                 mark the field `#[ulog(padding)]` or rename it"
+            ),
+        ));
+    }
+}
+
+/// Padding is a byte array and has no name of its own.
+fn padding_field(field: &FieldInput<'_>, errors: &mut Errors) {
+    if field.attrs.padding.is_none() {
+        return;
+    }
+    if !is_byte_array(field.ty) {
+        errors.push(syn::Error::new_spanned(
+            field.ty,
+            "a `#[ulog(padding)]` field must be a byte array `[u8; N]`",
+        ));
+    }
+    if let Some(rename) = &field.attrs.rename {
+        errors.push(syn::Error::new(
+            rename.span,
+            "padding fields are named `_paddingN` in the file; remove `rename`",
+        ));
+    }
+}
+
+fn is_byte_array(ty: &Type) -> bool {
+    match ty {
+        Type::Array(TypeArray { elem, .. }) => {
+            matches!(&**elem, Type::Path(p) if p.qself.is_none() && p.path.is_ident("u8"))
+        }
+        Type::Group(g) => is_byte_array(&g.elem),
+        Type::Paren(p) => is_byte_array(&p.elem),
+        _ => false,
+    }
+}
+
+/// ULog arrays have one dimension.
+fn array_dimensions(ty: &Type, errors: &mut Errors) {
+    if let Type::Array(outer) = ty
+        && let Type::Array(_) = &*outer.elem
+    {
+        errors.push(syn::Error::new_spanned(
+            ty,
+            "multi-dimensional arrays do not exist in ULog: use one `[T; N]` \
+             (flattened), or an array of a nested struct",
+        ));
+    }
+}
+
+/// The topic clock: `timestamp` holds microseconds in an unsigned integer.
+fn timestamp_type(field: &FieldInput<'_>, errors: &mut Errors) {
+    if field.attrs.padding.is_some() || field.ulog_name().0 != "timestamp" {
+        return;
+    }
+    let unsigned = ["u64", "u32", "u16", "u8"];
+    let ok = matches!(field.ty, Type::Path(p) if p.qself.is_none()
+        && unsigned.iter().any(|u| p.path.is_ident(u)));
+    if !ok {
+        errors.push(syn::Error::new_spanned(
+            field.ty,
+            "`timestamp` must be an unsigned integer of microseconds: `u64` \
+             (version-0 logs also used u32, u16, u8)",
+        ));
+    }
+}
+
+/// No two fields share a name in the file.
+fn unique_names(input: &Input<'_>, errors: &mut Errors) {
+    let mut seen: HashMap<String, &FieldInput<'_>> = HashMap::new();
+    for field in input.fields.iter().filter(|f| f.attrs.padding.is_none()) {
+        let (name, span) = field.ulog_name();
+        if let Some(first) = seen.get(&name) {
+            errors.push(syn::Error::new(
+                span,
+                format!(
+                    "duplicate ULog field name `{name}`: field `{}` already has it",
+                    first.rust_name()
+                ),
+            ));
+        } else {
+            seen.insert(name, field);
+        }
+    }
+}

@@ -1,0 +1,462 @@
+//! The runtime check: a struct's [`TypedFormat`] against a file's format of the same name,
+//! once, producing a [`DecodePlan`] of offsets in the file's layout.
+
+use std::fmt;
+use std::marker::PhantomData;
+
+use super::{Topic, TypedField, TypedFormat, TypedKind};
+use crate::read::Row;
+use crate::schema::{FieldKind, FormatId, LayoutError, Schema};
+
+/// Where each field of a struct lives in a file's rows: made once by the runtime check, then
+/// used for every row (offset reads only).
+#[derive(Debug, Clone)]
+pub struct DecodePlan {
+    fields: Box<[FieldPlan]>,
+}
+
+/// Where one struct field lives in the file's layout.
+#[derive(Debug, Clone)]
+pub struct FieldPlan {
+    offset: usize,
+    stride: usize,
+    present: bool,
+    nested: Option<Box<DecodePlan>>,
+}
+
+impl FieldPlan {
+    const ABSENT: FieldPlan = FieldPlan {
+        offset: 0,
+        stride: 0,
+        present: false,
+        nested: None,
+    };
+
+    /// Byte offset of the field (its first element) from the start of the enclosing format.
+    #[inline(always)]
+    pub fn offset(&self) -> usize {
+        self.offset
+    }
+
+    /// Distance between array elements in the file (the element's full size).
+    #[inline(always)]
+    pub fn stride(&self) -> usize {
+        self.stride
+    }
+
+    /// Whether the file has the field (only optional fields may be absent).
+    #[inline(always)]
+    pub fn is_present(&self) -> bool {
+        self.present
+    }
+
+    /// The plan of a nested element, relative to the element's start.
+    #[inline(always)]
+    pub fn nested_plan(&self) -> &DecodePlan {
+        // The check gives every present nested field its plan, and decoders read only
+        // present fields.
+        self.nested
+            .as_deref()
+            .expect("decode plan invariant: a present nested field has a nested plan")
+    }
+}
+
+impl DecodePlan {
+    /// Compares `format` (and the formats it nests) with the file's format of the same name in
+    /// `schema`; every difference is collected into one [`TypedError::Mismatch`].
+    pub fn check(format: &'static TypedFormat, schema: &Schema) -> Result<DecodePlan, TypedError> {
+        let id = schema
+            .id(format.name)
+            .ok_or_else(|| TypedError::NoSuchTopic {
+                topic: format.name.to_owned(),
+                rust_type: format.rust_type,
+            })?;
+        let resolved;
+        let schema = if schema.resolved(id).is_some() {
+            schema
+        } else {
+            let mut owned = schema.clone();
+            owned
+                .layout(id)
+                .map_err(|error| TypedError::InvalidFormat {
+                    topic: format.name.to_owned(),
+                    error,
+                })?;
+            resolved = owned;
+            &resolved
+        };
+        let mut mismatches = Vec::new();
+        let plan = check_format(format, id, schema, "", &mut mismatches);
+        match plan {
+            Some(plan) if mismatches.is_empty() => Ok(plan),
+            _ => Err(TypedError::Mismatch {
+                topic: format.name.to_owned(),
+                rust_type: format.rust_type,
+                mismatches,
+            }),
+        }
+    }
+
+    /// The plan of the struct's `i`-th field (declaration order, padding fields included).
+    #[inline(always)]
+    pub fn field(&self, i: usize) -> &FieldPlan {
+        &self.fields[i]
+    }
+
+    /// The plans of all fields, in declaration order.
+    pub fn fields(&self) -> &[FieldPlan] {
+        &self.fields
+    }
+}
+
+/// Checks one format level; `prefix` is the path of the enclosing field (`esc[].`).
+fn check_format(
+    tf: &'static TypedFormat,
+    id: FormatId,
+    schema: &Schema,
+    prefix: &str,
+    out: &mut Vec<Mismatch>,
+) -> Option<DecodePlan> {
+    let Some(layout) = schema.resolved(id) else {
+        out.push(Mismatch {
+            path: prefix.trim_end_matches('.').to_owned(),
+            kind: MismatchKind::Invalid {
+                type_name: schema.format(id).name.clone(),
+            },
+        });
+        return None;
+    };
+    if tf.exact {
+        let file = schema.format(id);
+        let rust = tf.to_format();
+        if *file != rust {
+            out.push(Mismatch {
+                path: prefix.trim_end_matches('.').to_owned(),
+                kind: MismatchKind::NotExact {
+                    file: file.to_string(),
+                    rust: rust.to_string(),
+                    rust_struct: tf.rust_type,
+                },
+            });
+        }
+    }
+    let mut fields = Vec::with_capacity(tf.fields.len());
+    for field in tf.fields {
+        if field.padding {
+            fields.push(FieldPlan::ABSENT);
+            continue;
+        }
+        let path = format!("{prefix}{}", field.name);
+        let Some(file_field) = layout
+            .fields
+            .iter()
+            .find(|f| !f.padding && f.name == field.name)
+        else {
+            if !field.optional {
+                out.push(Mismatch {
+                    path,
+                    kind: MismatchKind::Missing {
+                        rust_struct: tf.rust_type,
+                    },
+                });
+            }
+            fields.push(FieldPlan::ABSENT);
+            continue;
+        };
+        let type_mismatch = || Mismatch {
+            path: path.clone(),
+            kind: MismatchKind::Type {
+                file: file_type(schema, file_field.kind, file_field.array_len),
+                rust: field.rust_type.to_owned(),
+                rust_struct: tf.rust_type,
+            },
+        };
+        if file_field.array_len != field.array_len {
+            out.push(type_mismatch());
+            fields.push(FieldPlan::ABSENT);
+            continue;
+        }
+        let nested = match (field.kind, file_field.kind) {
+            (TypedKind::Primitive(a), FieldKind::Primitive(b)) if a == b => None,
+            (TypedKind::Nested(inner), FieldKind::Nested(inner_id))
+                if schema.format(inner_id).name == inner.name =>
+            {
+                let brackets = if field.array_len.is_some() { "[]" } else { "" };
+                let prefix = format!("{path}{brackets}.");
+                Some(Box::new(check_format(
+                    inner, inner_id, schema, &prefix, out,
+                )?))
+            }
+            _ => {
+                out.push(type_mismatch());
+                fields.push(FieldPlan::ABSENT);
+                continue;
+            }
+        };
+        fields.push(FieldPlan {
+            offset: file_field.offset,
+            stride: file_field.elem_size,
+            present: true,
+            nested,
+        });
+    }
+    Some(DecodePlan {
+        fields: fields.into_boxed_slice(),
+    })
+}
+
+/// A file field's type as a format string spells it: `int32_t`, `float[4]`, `esc_report[8]`.
+fn file_type(schema: &Schema, kind: FieldKind, array_len: Option<u16>) -> String {
+    let name = match kind {
+        FieldKind::Primitive(p) => p.c_name(),
+        FieldKind::Nested(id) => &schema.format(id).name,
+    };
+    match array_len {
+        Some(n) => format!("{name}[{n}]"),
+        None => name.to_owned(),
+    }
+}
+
+/// One difference between a struct and a file's format.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Mismatch {
+    /// Field path from the topic, `[]` marking arrays of nested types: `esc[].esc_rpm`
+    /// (empty for the topic itself).
+    pub path: String,
+    /// What differs.
+    pub kind: MismatchKind,
+}
+
+/// What differs between a struct field and the file's field.
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum MismatchKind {
+    /// Different types or array lengths.
+    Type {
+        /// The file's type, as a format string spells it (`int32_t`, `float[4]`).
+        file: String,
+        /// The struct field's Rust type.
+        rust: String,
+        /// The struct that has the field.
+        rust_struct: &'static str,
+    },
+    /// A field the struct requires and the file lacks.
+    Missing {
+        /// The struct that has the field.
+        rust_struct: &'static str,
+    },
+    /// Exact mode: the file's format is not identical to the struct's.
+    NotExact {
+        /// The file's format, printed.
+        file: String,
+        /// The struct's format, printed.
+        rust: String,
+        /// The struct.
+        rust_struct: &'static str,
+    },
+    /// The file's nested format has no valid layout.
+    Invalid {
+        /// The nested format.
+        type_name: String,
+    },
+}
+
+impl fmt::Display for Mismatch {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let path = &self.path;
+        match &self.kind {
+            MismatchKind::Type {
+                file,
+                rust,
+                rust_struct,
+            } => write!(
+                f,
+                "{path} is {file} in the file, {rust} in struct {rust_struct}"
+            ),
+            MismatchKind::Missing { rust_struct } => write!(
+                f,
+                "{path} is in struct {rust_struct} but not in the file \
+                 (make it an `Option` to accept files without it)"
+            ),
+            MismatchKind::NotExact {
+                file,
+                rust,
+                rust_struct,
+            } => {
+                let at = if path.is_empty() {
+                    String::new()
+                } else {
+                    format!("{path}: ")
+                };
+                write!(
+                    f,
+                    "{at}exact mode: the file's format `{file}` differs from struct \
+                     {rust_struct}'s `{rust}`"
+                )
+            }
+            MismatchKind::Invalid { type_name } => write!(
+                f,
+                "{path}: the file's format `{type_name}` has no valid layout"
+            ),
+        }
+    }
+}
+
+/// Why a typed view of a file could not be made.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum TypedError {
+    /// The file defines no format of this name.
+    #[error("the file has no format `{topic}` (wanted by struct {rust_type})")]
+    NoSuchTopic {
+        /// The topic.
+        topic: String,
+        /// The struct.
+        rust_type: &'static str,
+    },
+    /// The file defines the format but never subscribes to it.
+    #[error("`{topic}` is defined in the file but was never logged (no subscription)")]
+    NotLogged {
+        /// The topic.
+        topic: String,
+    },
+    /// No subscription with this instance number.
+    #[error("`{topic}` has no instance {multi_id} in the file (instances: {available:?})")]
+    NoInstance {
+        /// The topic.
+        topic: String,
+        /// The instance asked for.
+        multi_id: u8,
+        /// The instances the file has.
+        available: Vec<u8>,
+    },
+    /// The file's format cannot be laid out (a nested type missing, a cycle...).
+    #[error("the file's format `{topic}` is invalid: {error}")]
+    InvalidFormat {
+        /// The topic.
+        topic: String,
+        /// Why.
+        error: LayoutError,
+    },
+    /// The struct does not match the file's format; every difference is listed.
+    #[error("{}", mismatch_lines(.topic, .mismatches))]
+    Mismatch {
+        /// The topic.
+        topic: String,
+        /// The struct.
+        rust_type: &'static str,
+        /// Every difference.
+        mismatches: Vec<Mismatch>,
+    },
+}
+
+fn mismatch_lines(topic: &str, mismatches: &[Mismatch]) -> String {
+    let lines: Vec<String> = mismatches.iter().map(|m| format!("{topic}: {m}")).collect();
+    lines.join("; ")
+}
+
+/// A checked decoder of one topic's rows: made once against a file's formats, then decoding
+/// each row by offset reads only.
+///
+/// ```
+/// # use ulog_runtime::{ULog, typed::TypedDecoder, schema::Schema};
+/// #[derive(ULog, Debug, PartialEq)]
+/// struct Gps { timestamp: u64, alt: f32 }
+///
+/// let mut schema = Schema::new();
+/// // The file's format has another field and a different order: still a match.
+/// schema.insert("gps:float alt;uint8_t sats;uint64_t timestamp;".parse().unwrap()).unwrap();
+/// let decoder = TypedDecoder::<Gps>::new(&schema)?;
+/// let mut row = 2.5f32.to_le_bytes().to_vec();
+/// row.push(9);
+/// row.extend_from_slice(&7u64.to_le_bytes());
+/// assert_eq!(decoder.decode(&row), Some(Gps { timestamp: 7, alt: 2.5 }));
+/// # Ok::<(), ulog_runtime::typed::TypedError>(())
+/// ```
+pub struct TypedDecoder<T> {
+    plan: DecodePlan,
+    format: FormatId,
+    min_len: usize,
+    _type: PhantomData<fn() -> T>,
+}
+
+impl<T> fmt::Debug for TypedDecoder<T> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("TypedDecoder")
+            .field("format", &self.format)
+            .field("min_len", &self.min_len)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<T> Clone for TypedDecoder<T> {
+    fn clone(&self) -> Self {
+        TypedDecoder {
+            plan: self.plan.clone(),
+            format: self.format,
+            min_len: self.min_len,
+            _type: PhantomData,
+        }
+    }
+}
+
+impl<T: Topic> TypedDecoder<T> {
+    /// Checks `T` against the format of the same name in `schema` (a file's:
+    /// [`Metadata::schema`](crate::read::Metadata::schema)).
+    pub fn new(schema: &Schema) -> Result<TypedDecoder<T>, TypedError> {
+        let plan = DecodePlan::check(&T::FORMAT, schema)?;
+        let format = schema.id(T::FORMAT.name).expect("checked above");
+        let min_len = read_end(&plan, &T::FORMAT);
+        Ok(TypedDecoder {
+            plan,
+            format,
+            min_len,
+            _type: PhantomData,
+        })
+    }
+
+    /// Decodes a row of the checked format; `None` if it is too short for the fields read.
+    #[inline]
+    pub fn decode(&self, data: &[u8]) -> Option<T> {
+        (data.len() >= self.min_len).then(|| T::decode(&self.plan, data))
+    }
+
+    /// Decodes a row read from the file this decoder was checked against; `None` for a row
+    /// of another topic.
+    #[inline]
+    pub fn decode_row(&self, row: &Row<'_>) -> Option<T> {
+        if row.subscription.format() != Some(self.format) {
+            return None;
+        }
+        self.decode(row.data)
+    }
+
+    /// The plan.
+    pub fn plan(&self) -> &DecodePlan {
+        &self.plan
+    }
+
+    /// The file format it was checked against.
+    pub fn format(&self) -> FormatId {
+        self.format
+    }
+}
+
+/// The end of the last byte the plan reads (0 for a plan that reads nothing).
+fn read_end(plan: &DecodePlan, tf: &TypedFormat) -> usize {
+    plan.fields
+        .iter()
+        .zip(tf.fields)
+        .filter(|(p, _)| p.present)
+        .map(|(p, f): (&FieldPlan, &TypedField)| {
+            let count = f.array_len.map_or(1, usize::from);
+            let last_start = p.offset + count.saturating_sub(1) * p.stride;
+            let last_len = match (f.kind, &p.nested) {
+                (TypedKind::Nested(inner), Some(nested)) => read_end(nested, inner),
+                _ => super::kind_size(f.kind),
+            };
+            last_start + last_len
+        })
+        .max()
+        .unwrap_or(0)
+}

@@ -1,0 +1,253 @@
+//! The Rust types a typed field may have, and how each maps to a ULog field type. This is the
+//! only type table of the workspace: the derive refers to these impls and has none of its own.
+
+use std::fmt;
+
+use super::check::FieldPlan;
+use super::{TypedKind, ULog};
+use crate::schema::Primitive;
+
+/// A `char[N]` field: text of at most `N` bytes, zero-filled after its end (ULog strings have
+/// no terminator when they fill the array).
+///
+/// ```
+/// use ulog_runtime::Chars;
+/// let name: Chars<8> = Chars::new("rover").unwrap();
+/// assert_eq!(name.as_str(), Ok("rover"));
+/// assert_eq!(name.as_bytes(), b"rover\0\0\0");
+/// assert!(Chars::<2>::new("rover").is_none());
+/// ```
+#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Chars<const N: usize>(pub [u8; N]);
+
+impl<const N: usize> Chars<N> {
+    /// The text, zero-filled to `N` bytes; `None` if it is longer than `N` bytes.
+    pub fn new(text: &str) -> Option<Chars<N>> {
+        let mut bytes = [0u8; N];
+        bytes
+            .get_mut(..text.len())?
+            .copy_from_slice(text.as_bytes());
+        Some(Chars(bytes))
+    }
+
+    /// All `N` bytes, the zero fill included.
+    pub fn as_bytes(&self) -> &[u8; N] {
+        &self.0
+    }
+
+    /// The bytes up to the first zero byte (all of them if there is none).
+    pub fn text_bytes(&self) -> &[u8] {
+        let end = self.0.iter().position(|&b| b == 0).unwrap_or(N);
+        &self.0[..end]
+    }
+
+    /// The text up to the first zero byte, if it is UTF-8.
+    pub fn as_str(&self) -> Result<&str, std::str::Utf8Error> {
+        std::str::from_utf8(self.text_bytes())
+    }
+
+    /// The text up to the first zero byte, invalid UTF-8 replaced.
+    pub fn to_string_lossy(&self) -> std::borrow::Cow<'_, str> {
+        String::from_utf8_lossy(self.text_bytes())
+    }
+}
+
+impl<const N: usize> Default for Chars<N> {
+    fn default() -> Chars<N> {
+        Chars([0; N])
+    }
+}
+
+impl<const N: usize> fmt::Debug for Chars<N> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Debug::fmt(&*self.to_string_lossy(), f)
+    }
+}
+
+impl<const N: usize> fmt::Display for Chars<N> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.to_string_lossy())
+    }
+}
+
+/// A single (non-array) ULog value: one of the 10 numeric types, `bool`, or a nested type
+/// deriving [`ULog`]. Arrays `[T; N]` of these are fields too.
+#[diagnostic::on_unimplemented(
+    message = "`{Self}` cannot be an element of a ULog array",
+    label = "not a ULog element type",
+    note = "array elements are u8, i8, u16, i16, u32, i32, u64, i64, f32, f64, bool, or a struct deriving `ULog`; arrays of arrays (multi-dimensional) do not exist in ULog: flatten them to one `[T; N]`"
+)]
+pub trait Element: Sized {
+    /// The ULog type of one element.
+    const KIND: TypedKind;
+    /// Appends the packed little-endian encoding.
+    fn encode_element(&self, out: &mut Vec<u8>);
+    /// Decodes the element at `offset` of `row`; `plan` is the field's (its nested plan for
+    /// nested types).
+    fn decode_at(plan: &FieldPlan, row: &[u8], offset: usize) -> Self;
+}
+
+/// A Rust type usable as a field of a `#[derive(ULog)]` struct.
+#[diagnostic::on_unimplemented(
+    message = "`{Self}` cannot be a ULog field",
+    label = "not a ULog field type",
+    note = "ULog fields are u8, i8, u16, i16, u32, i32, u64, i64, f32, f64, bool, `Chars<N>` (char[N] text), arrays `[T; N]` of those, structs deriving `ULog` and arrays of them, or `Option` of any of these (a field the file may lack)"
+)]
+pub trait FieldValue: Sized {
+    /// The ULog element type.
+    const KIND: TypedKind;
+    /// `Some(N)` for arrays (`[T; N]`, `Chars<N>`).
+    const ARRAY_LEN: Option<u16>;
+    /// Whether the field may be missing from a file (`Option<T>`).
+    const OPTIONAL: bool = false;
+    /// Appends the packed little-endian encoding.
+    fn encode_field(&self, out: &mut Vec<u8>);
+    /// Decodes the field from a row through its plan.
+    fn decode_field(plan: &FieldPlan, row: &[u8]) -> Self;
+}
+
+/// Reads `N` bytes at `offset`; the decode plan guarantees they are inside the row.
+#[inline(always)]
+fn bytes_at<const N: usize>(row: &[u8], offset: usize) -> [u8; N] {
+    let mut out = [0u8; N];
+    out.copy_from_slice(&row[offset..offset + N]);
+    out
+}
+
+macro_rules! numeric_elements {
+    ($($ty:ty => $prim:ident),* $(,)?) => {$(
+        impl Element for $ty {
+            const KIND: TypedKind = TypedKind::Primitive(Primitive::$prim);
+            #[inline]
+            fn encode_element(&self, out: &mut Vec<u8>) {
+                out.extend_from_slice(&self.to_le_bytes());
+            }
+            #[inline(always)]
+            fn decode_at(_: &FieldPlan, row: &[u8], offset: usize) -> $ty {
+                <$ty>::from_le_bytes(bytes_at(row, offset))
+            }
+        }
+    )*};
+}
+
+numeric_elements! {
+    u8 => UInt8, i8 => Int8, u16 => UInt16, i16 => Int16, u32 => UInt32, i32 => Int32,
+    u64 => UInt64, i64 => Int64, f32 => Float, f64 => Double,
+}
+
+impl Element for bool {
+    const KIND: TypedKind = TypedKind::Primitive(Primitive::Bool);
+    #[inline]
+    fn encode_element(&self, out: &mut Vec<u8>) {
+        out.push(u8::from(*self));
+    }
+    /// Any non-zero byte is `true`, as in C.
+    #[inline(always)]
+    fn decode_at(_: &FieldPlan, row: &[u8], offset: usize) -> bool {
+        row[offset] != 0
+    }
+}
+
+impl<T: ULog> Element for T {
+    const KIND: TypedKind = TypedKind::Nested(&T::FORMAT);
+    #[inline]
+    fn encode_element(&self, out: &mut Vec<u8>) {
+        ULog::encode(self, out);
+    }
+    #[inline]
+    fn decode_at(plan: &FieldPlan, row: &[u8], offset: usize) -> T {
+        T::decode(plan.nested_plan(), &row[offset..])
+    }
+}
+
+impl<E: Element> FieldValue for E {
+    const KIND: TypedKind = E::KIND;
+    const ARRAY_LEN: Option<u16> = None;
+    #[inline]
+    fn encode_field(&self, out: &mut Vec<u8>) {
+        self.encode_element(out);
+    }
+    #[inline(always)]
+    fn decode_field(plan: &FieldPlan, row: &[u8]) -> E {
+        E::decode_at(plan, row, plan.offset())
+    }
+}
+
+/// `N` as an array length of a format; a larger `N` fails to compile.
+const fn array_len(n: usize) -> Option<u16> {
+    assert!(
+        n >= 1 && n <= u16::MAX as usize,
+        "ULog array lengths are 1..=65535"
+    );
+    Some(n as u16)
+}
+
+impl<E: Element, const N: usize> FieldValue for [E; N] {
+    const KIND: TypedKind = E::KIND;
+    const ARRAY_LEN: Option<u16> = array_len(N);
+    #[inline]
+    fn encode_field(&self, out: &mut Vec<u8>) {
+        for e in self {
+            e.encode_element(out);
+        }
+    }
+    #[inline]
+    fn decode_field(plan: &FieldPlan, row: &[u8]) -> [E; N] {
+        let (start, stride) = (plan.offset(), plan.stride());
+        std::array::from_fn(|i| E::decode_at(plan, row, start + i * stride))
+    }
+}
+
+impl<const N: usize> FieldValue for Chars<N> {
+    const KIND: TypedKind = TypedKind::Primitive(Primitive::Char);
+    const ARRAY_LEN: Option<u16> = array_len(N);
+    #[inline]
+    fn encode_field(&self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.0);
+    }
+    #[inline]
+    fn decode_field(plan: &FieldPlan, row: &[u8]) -> Chars<N> {
+        Chars(bytes_at(row, plan.offset()))
+    }
+}
+
+/// A field a file may lack: `None` when the file's format has no field of that name.
+/// Writing `None` writes zeros.
+impl<F: FieldValue> FieldValue for Option<F> {
+    const KIND: TypedKind = F::KIND;
+    const ARRAY_LEN: Option<u16> = F::ARRAY_LEN;
+    const OPTIONAL: bool = true;
+    fn encode_field(&self, out: &mut Vec<u8>) {
+        match self {
+            Some(v) => v.encode_field(out),
+            None => {
+                let size = super::kind_size(F::KIND) * F::ARRAY_LEN.map_or(1, usize::from);
+                out.resize(out.len() + size, 0);
+            }
+        }
+    }
+    #[inline]
+    fn decode_field(plan: &FieldPlan, row: &[u8]) -> Option<F> {
+        plan.is_present().then(|| F::decode_field(plan, row))
+    }
+}
+
+/// A padding field, `[u8; N]`: written as zeros, never read.
+#[diagnostic::on_unimplemented(
+    message = "a `#[ulog(padding)]` field must be a byte array `[u8; N]`, not `{Self}`",
+    label = "not `[u8; N]`"
+)]
+pub trait Padding: Sized {
+    /// Its length in bytes.
+    const LEN: u16;
+    /// The value a decoded struct holds.
+    const ZERO: Self;
+}
+
+impl<const N: usize> Padding for [u8; N] {
+    const LEN: u16 = match array_len(N) {
+        Some(n) => n,
+        None => 0,
+    };
+    const ZERO: [u8; N] = [0; N];
+}

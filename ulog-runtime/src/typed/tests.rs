@@ -1,0 +1,352 @@
+//! Typed formats against hand-laid bytes and hand-written format strings.
+
+use super::*;
+use crate::schema::Schema;
+use crate::{Chars, Event, Log, StreamReader, ULog, Writer, WriterOptions};
+
+#[derive(ULog, Debug, Clone, Copy, PartialEq, Default)]
+struct EscReport {
+    esc_rpm: i32,
+    esc_voltage: f32,
+    #[ulog(padding)]
+    _pad: [u8; 3],
+}
+
+#[derive(ULog, Debug, Clone, PartialEq)]
+#[ulog(name = "esc_status")]
+struct EscStatus {
+    timestamp: u64,
+    esc_count: u8,
+    esc: [EscReport; 2],
+    #[ulog(padding)]
+    _pad: [u8; 7],
+}
+
+#[derive(ULog, Debug, PartialEq)]
+struct VehicleGpsPosition {
+    timestamp: u64,
+    #[ulog(rename = "type")]
+    kind: u8,
+    ok: bool,
+    name: Chars<6>,
+    q: [f32; 2],
+    alt: Option<f64>,
+}
+
+fn schema(formats: &[&str]) -> Schema {
+    let mut s = Schema::new();
+    for f in formats {
+        s.insert(f.parse().unwrap()).unwrap();
+    }
+    s
+}
+
+#[test]
+fn formats_print_as_px4_writes_them() {
+    let printed: Vec<String> = EscStatus::FORMAT
+        .formats()
+        .iter()
+        .map(|f| f.to_string())
+        .collect();
+    assert_eq!(
+        printed,
+        [
+            "esc_report:int32_t esc_rpm;float esc_voltage;uint8_t[3] _padding0;",
+            "esc_status:uint64_t timestamp;uint8_t esc_count;esc_report[2] esc;uint8_t[7] _padding0;",
+        ]
+    );
+    assert_eq!(
+        VehicleGpsPosition::FORMAT.to_format().to_string(),
+        "vehicle_gps_position:uint64_t timestamp;uint8_t type;bool ok;char[6] name;float[2] q;double alt;"
+    );
+    assert_eq!(EscReport::FORMAT.name, "esc_report");
+    assert_eq!(
+        (EscStatus::FORMAT.size(), EscStatus::FORMAT.payload_size()),
+        (38, 31)
+    );
+}
+
+#[test]
+fn encoding_is_the_packed_little_endian_layout() {
+    let value = EscStatus {
+        timestamp: 0x0102_0304_0506_0708,
+        esc_count: 2,
+        esc: [
+            EscReport {
+                esc_rpm: -2,
+                esc_voltage: 1.5,
+                _pad: [9; 3],
+            },
+            EscReport {
+                esc_rpm: 300,
+                esc_voltage: -0.25,
+                _pad: [0; 3],
+            },
+        ],
+        _pad: [0; 7],
+    };
+    let mut expected = vec![8, 7, 6, 5, 4, 3, 2, 1, 2];
+    expected.extend_from_slice(&[0xfe, 0xff, 0xff, 0xff, 0x00, 0x00, 0xc0, 0x3f, 0, 0, 0]);
+    expected.extend_from_slice(&[0x2c, 0x01, 0, 0, 0x00, 0x00, 0x80, 0xbe, 0, 0, 0]);
+    let mut full = Vec::new();
+    value.encode(&mut full);
+    assert_eq!(full[..31], expected[..], "padding is written as zeros");
+    assert_eq!(full[31..], [0; 7]);
+    let mut row = Vec::new();
+    encode_row(&value, &mut row);
+    assert_eq!(row, expected, "rows omit the trailing padding");
+
+    let s = schema(&[
+        "esc_report:int32_t esc_rpm;float esc_voltage;uint8_t[3] _padding0;",
+        "esc_status:uint64_t timestamp;uint8_t esc_count;esc_report[2] esc;uint8_t[7] _padding0;",
+    ]);
+    let decoder = TypedDecoder::<EscStatus>::new(&s).unwrap();
+    let mut back = value.clone();
+    back.esc[0]._pad = [0; 3];
+    assert_eq!(decoder.decode(&row), Some(back));
+    // The last field read ends at byte 28: the nested padding after it is never read.
+    assert!(decoder.decode(&row[..28]).is_some());
+    assert_eq!(
+        decoder.decode(&row[..27]),
+        None,
+        "too short for the fields read"
+    );
+}
+
+#[test]
+fn fields_match_by_name_whatever_the_order_and_padding() {
+    // The file's order, extra fields and padding differ from the struct's.
+    let s = schema(&[
+        "esc_status:esc_report[2] esc;uint64_t timestamp;uint16_t extra;uint8_t esc_count;",
+        "esc_report:uint8_t[2] _padding0;float esc_voltage;int32_t esc_rpm;float esc_temp;",
+    ]);
+    let decoder = TypedDecoder::<EscStatus>::new(&s).unwrap();
+    let mut row = Vec::new();
+    for (v, rpm) in [(3.5f32, 10i32), (4.5, -20)] {
+        row.extend_from_slice(&[0xaa, 0xbb]);
+        row.extend_from_slice(&v.to_le_bytes());
+        row.extend_from_slice(&rpm.to_le_bytes());
+        row.extend_from_slice(&99f32.to_le_bytes());
+    }
+    row.extend_from_slice(&77u64.to_le_bytes());
+    row.extend_from_slice(&[1, 2, 5]);
+    let got = decoder.decode(&row).unwrap();
+    assert_eq!(got.timestamp, 77);
+    assert_eq!(got.esc_count, 5);
+    assert_eq!((got.esc[0].esc_rpm, got.esc[0].esc_voltage), (10, 3.5));
+    assert_eq!((got.esc[1].esc_rpm, got.esc[1].esc_voltage), (-20, 4.5));
+}
+
+#[test]
+fn a_mismatch_names_the_topic_every_path_and_both_sides() {
+    let s = schema(&[
+        "esc_status:uint64_t timestamp;uint16_t esc_count;esc_report[4] esc;",
+        "esc_report:float esc_rpm;float esc_voltage;",
+    ]);
+    let err = TypedDecoder::<EscStatus>::new(&s).unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "esc_status: esc_count is uint16_t in the file, u8 in struct EscStatus; \
+         esc_status: esc is esc_report[4] in the file, [EscReport; 2] in struct EscStatus"
+    );
+    let s = schema(&[
+        "esc_status:uint64_t timestamp;uint8_t esc_count;esc_report[2] esc;",
+        "esc_report:float esc_rpm;double esc_voltage;",
+    ]);
+    let err = TypedDecoder::<EscStatus>::new(&s).unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "esc_status: esc[].esc_rpm is float in the file, i32 in struct EscReport; \
+         esc_status: esc[].esc_voltage is double in the file, f32 in struct EscReport"
+    );
+    let TypedError::Mismatch { mismatches, .. } = err else {
+        panic!("a mismatch")
+    };
+    assert_eq!(mismatches[0].path, "esc[].esc_rpm");
+}
+
+#[test]
+fn missing_fields_are_errors_unless_optional() {
+    let s = schema(&["vehicle_gps_position:uint64_t timestamp;uint8_t type;bool ok;char[6] name;"]);
+    let err = TypedDecoder::<VehicleGpsPosition>::new(&s).unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "vehicle_gps_position: q is in struct VehicleGpsPosition but not in the file \
+         (make it an `Option` to accept files without it)"
+    );
+    let s = schema(&[
+        "vehicle_gps_position:uint64_t timestamp;uint8_t type;bool ok;char[6] name;float[2] q;",
+    ]);
+    let decoder = TypedDecoder::<VehicleGpsPosition>::new(&s).unwrap();
+    let mut row = 5u64.to_le_bytes().to_vec();
+    row.extend_from_slice(&[3, 2]); // type, ok (any non-zero byte is true)
+    row.extend_from_slice(b"gps\0\0\0");
+    row.extend_from_slice(&1f32.to_le_bytes());
+    row.extend_from_slice(&2f32.to_le_bytes());
+    let got = decoder.decode(&row).unwrap();
+    assert_eq!(
+        got,
+        VehicleGpsPosition {
+            timestamp: 5,
+            kind: 3,
+            ok: true,
+            name: Chars::new("gps").unwrap(),
+            q: [1.0, 2.0],
+            alt: None,
+        }
+    );
+    assert_eq!(got.name.as_str(), Ok("gps"));
+}
+
+#[derive(ULog, Debug, PartialEq)]
+#[ulog(name = "sensor", exact)]
+struct ExactSensor {
+    timestamp: u64,
+    x: f32,
+    #[ulog(padding)]
+    _pad: [u8; 4],
+}
+
+#[test]
+fn exact_mode_refuses_any_difference() {
+    let same = schema(&["sensor:uint64_t timestamp;float x;uint8_t[4] _padding0;"]);
+    assert!(TypedDecoder::<ExactSensor>::new(&same).is_ok());
+    for other in [
+        "sensor:float x;uint64_t timestamp;uint8_t[4] _padding0;",
+        "sensor:uint64_t timestamp;float x;",
+        "sensor:uint64_t timestamp;float x;uint8_t[4] _padding0;float y;",
+    ] {
+        let err = TypedDecoder::<ExactSensor>::new(&schema(&[other])).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            format!(
+                "sensor: exact mode: the file's format `{other}` differs from struct \
+                 ExactSensor's `sensor:uint64_t timestamp;float x;uint8_t[4] _padding0;`"
+            )
+        );
+    }
+}
+
+#[test]
+fn absent_topics_are_their_own_errors() {
+    let err = TypedDecoder::<ExactSensor>::new(&schema(&["other:uint64_t timestamp;"]));
+    assert_eq!(
+        err.unwrap_err().to_string(),
+        "the file has no format `sensor` (wanted by struct ExactSensor)"
+    );
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    w.formats_of::<ExactSensor>().unwrap();
+    let sub = w.topic::<EscStatus>(1).unwrap();
+    w.write(
+        &sub,
+        &EscStatus {
+            timestamp: 1,
+            esc_count: 0,
+            esc: [EscReport::default(); 2],
+            _pad: [0; 7],
+        },
+    )
+    .unwrap();
+    let log = Log::from_vec(w.into_inner()).unwrap();
+    assert_eq!(
+        log.topic::<ExactSensor>().unwrap_err(),
+        TypedError::NotLogged {
+            topic: "sensor".into()
+        }
+    );
+    let topic = log.topic::<EscStatus>().unwrap();
+    assert_eq!(
+        topic.instance(0).unwrap_err().to_string(),
+        "`esc_status` has no instance 0 in the file (instances: [1])"
+    );
+    assert_eq!(topic.instance(1).unwrap().count(), 1);
+}
+
+fn status(t: u64, rpm: i32) -> EscStatus {
+    EscStatus {
+        timestamp: t,
+        esc_count: 2,
+        esc: [
+            EscReport {
+                esc_rpm: rpm,
+                esc_voltage: t as f32 / 2.0,
+                _pad: [0; 3],
+            },
+            EscReport {
+                esc_rpm: -rpm,
+                esc_voltage: 0.5,
+                _pad: [0; 3],
+            },
+        ],
+        _pad: [0; 7],
+    }
+}
+
+#[test]
+fn written_rows_read_back_per_instance_and_in_file_order() {
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    let a = w.topic::<EscStatus>(0).unwrap();
+    let b = w.topic::<EscStatus>(1).unwrap();
+    let order = [(a, 1, 10), (b, 2, 20), (b, 3, 30), (a, 4, 40), (b, 5, 50)];
+    for (sub, t, rpm) in order {
+        w.write(&sub, &status(t, rpm)).unwrap();
+    }
+    let bytes = w.into_inner();
+    let log = Log::from_slice(&bytes).unwrap();
+    // The dynamic reader sees the same format and rows of 31 bytes (trailing padding omitted).
+    let sub = log.subscription("esc_status", 1).unwrap();
+    assert_eq!(sub.payload_sizes(), Some((31, 38)));
+    assert!(log.rows(sub).all(|r| r.data.len() == 31));
+    let first = log.rows(sub).next().unwrap().value().unwrap();
+    assert_eq!(
+        first.field("timestamp").and_then(|v| v.as_scalar()),
+        Some(crate::Scalar::UInt64(2))
+    );
+    let topic = log.topic::<EscStatus>().unwrap();
+    assert_eq!(topic.multi_ids(), [0, 1]);
+    let zero: Vec<EscStatus> = topic.instance(0).unwrap().collect();
+    assert_eq!(zero, [status(1, 10), status(4, 40)]);
+    let all: Vec<(u8, u64)> = topic.rows().map(|(m, s)| (m, s.timestamp)).collect();
+    assert_eq!(all, [(0, 1), (1, 2), (1, 3), (0, 4), (1, 5)]);
+
+    // The same through the streaming reader, checked once when the subscription arrives.
+    let mut reader = StreamReader::new(&bytes[..]).unwrap();
+    let mut decoder = None;
+    let mut streamed = Vec::new();
+    while let Some(event) = reader.next_event().unwrap() {
+        match event {
+            Event::Subscription(s) if s.name == "esc_status" && decoder.is_none() => {
+                decoder = Some(TypedDecoder::<EscStatus>::new(reader.metadata().schema()).unwrap());
+            }
+            Event::Row(row) => {
+                streamed.push(
+                    decoder
+                        .as_ref()
+                        .unwrap()
+                        .decode_row(&row)
+                        .unwrap()
+                        .timestamp,
+                );
+            }
+            _ => {}
+        }
+    }
+    assert_eq!(streamed, [1, 2, 3, 4, 5]);
+}
+
+#[test]
+fn a_second_layout_under_one_name_is_refused_and_the_file_stays_valid() {
+    #[derive(ULog)]
+    #[ulog(name = "esc_report")]
+    struct OtherReport {
+        timestamp: u64,
+    }
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    let a = w.topic::<EscStatus>(0).unwrap();
+    let err = w.topic::<OtherReport>(0).unwrap_err();
+    assert!(err.to_string().contains("esc_report"), "{err}");
+    w.write(&a, &status(1, 1)).unwrap();
+    let log = Log::from_vec(w.into_inner()).unwrap();
+    assert!(log.diagnostics().is_empty(), "{:?}", log.diagnostics());
+    assert_eq!(log.topic::<EscStatus>().unwrap().rows().count(), 1);
+}

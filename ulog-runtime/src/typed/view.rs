@@ -1,0 +1,217 @@
+//! Typed views of a whole-file [`Log`]: one topic, checked once, its rows decoded per instance
+//! or for all instances in file order.
+
+use std::fmt;
+
+use super::{Topic, TypedDecoder, TypedError};
+use crate::read::Log;
+
+/// One topic of a [`Log`] read as `T` ([`Log::topic`]): checked against the file's format once.
+pub struct TypedTopic<'a, T> {
+    log: &'a Log<'a>,
+    decoder: TypedDecoder<T>,
+    /// Indices of the topic's subscriptions, in file order.
+    subs: Vec<usize>,
+}
+
+impl<T> fmt::Debug for TypedTopic<'_, T> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("TypedTopic")
+            .field("decoder", &self.decoder)
+            .field("subscriptions", &self.subs)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Log<'_> {
+    /// The rows of topic `T` (the format named `T::FORMAT.name`), after checking `T` against
+    /// the file's definition of it. Errors: the file lacks the format, never subscribes it, or
+    /// the struct does not match (every difference listed).
+    ///
+    /// ```
+    /// use ulog_runtime::{Log, ULog, Writer, WriterOptions};
+    ///
+    /// #[derive(ULog, Debug, PartialEq)]
+    /// struct Battery { timestamp: u64, voltage_v: f32 }
+    ///
+    /// let mut w = Writer::new(Vec::new(), WriterOptions::default())?;
+    /// let battery = w.topic::<Battery>(0)?;
+    /// w.write(&battery, &Battery { timestamp: 10, voltage_v: 15.2 })?;
+    /// let bytes = w.into_inner();
+    ///
+    /// let log = Log::from_slice(&bytes)?;
+    /// let rows: Vec<Battery> = log.topic::<Battery>()?.instance(0)?.collect();
+    /// assert_eq!(rows, [Battery { timestamp: 10, voltage_v: 15.2 }]);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn topic<T: Topic>(&self) -> Result<TypedTopic<'_, T>, TypedError> {
+        let decoder = TypedDecoder::<T>::new(self.metadata().schema())?;
+        let subs: Vec<usize> = self
+            .subscriptions()
+            .iter()
+            .filter(|s| s.format() == Some(decoder.format()))
+            .map(|s| s.index())
+            .collect();
+        if subs.is_empty() {
+            return Err(TypedError::NotLogged {
+                topic: T::FORMAT.name.to_owned(),
+            });
+        }
+        Ok(TypedTopic {
+            log: self,
+            decoder,
+            subs,
+        })
+    }
+}
+
+impl<'a, T: Topic> TypedTopic<'a, T> {
+    /// The instances (`multi_id`s) logged, ascending.
+    pub fn multi_ids(&self) -> Vec<u8> {
+        let mut ids: Vec<u8> = self
+            .subs
+            .iter()
+            .map(|&i| self.log.subscriptions()[i].multi_id)
+            .collect();
+        ids.sort_unstable();
+        ids.dedup();
+        ids
+    }
+
+    /// The rows of one instance, in file order.
+    pub fn instance(&self, multi_id: u8) -> Result<TypedRows<'a, T>, TypedError> {
+        let subs: Vec<usize> = self
+            .subs
+            .iter()
+            .copied()
+            .filter(|&i| self.log.subscriptions()[i].multi_id == multi_id)
+            .collect();
+        if subs.is_empty() {
+            return Err(TypedError::NoInstance {
+                topic: T::FORMAT.name.to_owned(),
+                multi_id,
+                available: self.multi_ids(),
+            });
+        }
+        Ok(TypedRows {
+            merge: self.merge(&subs),
+            decoder: self.decoder.clone(),
+        })
+    }
+
+    /// The rows of every instance, in file order, each with its `multi_id`.
+    pub fn rows(&self) -> TopicRows<'a, T> {
+        TopicRows {
+            merge: self.merge(&self.subs),
+            decoder: self.decoder.clone(),
+        }
+    }
+
+    /// The checked decoder.
+    pub fn decoder(&self) -> &TypedDecoder<T> {
+        &self.decoder
+    }
+
+    fn merge(&self, subs: &[usize]) -> Merge<'a> {
+        Merge {
+            log: self.log,
+            heads: subs
+                .iter()
+                .map(|&i| self.log.row_numbers(i).iter())
+                .collect(),
+        }
+    }
+}
+
+/// Row numbers of several subscriptions merged into file order.
+#[derive(Clone)]
+struct Merge<'a> {
+    log: &'a Log<'a>,
+    heads: Vec<std::slice::Iter<'a, usize>>,
+}
+
+impl<'a> Merge<'a> {
+    #[inline]
+    fn next(&mut self) -> Option<crate::Row<'a>> {
+        let n = match self.heads.as_mut_slice() {
+            [one] => *one.next()?,
+            heads => {
+                let (_, head) = heads
+                    .iter_mut()
+                    .filter_map(|h| h.as_slice().first().copied().map(|n| (n, h)))
+                    .min_by_key(|(n, _)| *n)?;
+                *head.next()?
+            }
+        };
+        Some(self.log.row(n))
+    }
+
+    fn len(&self) -> usize {
+        self.heads.iter().map(|h| h.len()).sum()
+    }
+}
+
+/// Decoded rows of one topic instance ([`TypedTopic::instance`]).
+pub struct TypedRows<'a, T> {
+    merge: Merge<'a>,
+    decoder: TypedDecoder<T>,
+}
+
+impl<T: Topic> Iterator for TypedRows<'_, T> {
+    type Item = T;
+
+    #[inline]
+    fn next(&mut self) -> Option<T> {
+        loop {
+            let row = self.merge.next()?;
+            // Every row the log accepted is long enough for the checked plan.
+            if let Some(value) = self.decoder.decode(row.data) {
+                return Some(value);
+            }
+        }
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        (0, Some(self.merge.len()))
+    }
+}
+
+/// Decoded rows of every instance of a topic, with their `multi_id`s ([`TypedTopic::rows`]).
+pub struct TopicRows<'a, T> {
+    merge: Merge<'a>,
+    decoder: TypedDecoder<T>,
+}
+
+impl<T: Topic> Iterator for TopicRows<'_, T> {
+    type Item = (u8, T);
+
+    #[inline]
+    fn next(&mut self) -> Option<(u8, T)> {
+        loop {
+            let row = self.merge.next()?;
+            if let Some(value) = self.decoder.decode(row.data) {
+                return Some((row.subscription.multi_id, value));
+            }
+        }
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        (0, Some(self.merge.len()))
+    }
+}
+
+impl<T> fmt::Debug for TypedRows<'_, T> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("TypedRows")
+            .field("remaining", &self.merge.len())
+            .finish()
+    }
+}
+
+impl<T> fmt::Debug for TopicRows<'_, T> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("TopicRows")
+            .field("remaining", &self.merge.len())
+            .finish()
+    }
+}
