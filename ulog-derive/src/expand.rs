@@ -136,6 +136,21 @@ pub(crate) fn expand(input: &Input<'_>, topic: &str) -> TokenStream {
                 }
             }
 
+            #[automatically_derived]
+            impl #p::Element for #ident {
+                const KIND: #p::TypedKind = #p::nested_kind::<Self>();
+
+                #[inline]
+                fn encode_element(&self, out: &mut #p::Vec<u8>) {
+                    <Self as #p::ULog>::encode(self, out);
+                }
+
+                #[inline]
+                fn decode_at(plan: &#p::FieldPlan, row: &[u8], offset: usize) -> Self {
+                    #p::decode_nested(plan, row, offset)
+                }
+            }
+
             #topic_impl
 
             #size_assert

@@ -2,8 +2,10 @@
 //! anything here may change in any release.
 
 pub use crate::schema::{MAX_DATA_SIZE, Primitive};
+pub use crate::typed::field::{decode_nested, nested_kind};
 pub use crate::typed::{
-    DecodePlan, FieldValue, Padding, Topic, TypedField, TypedFormat, TypedKind, ULog,
+    DecodePlan, Element, FieldPlan, FieldValue, Padding, Topic, TypedField, TypedFormat, TypedKind,
+    ULog,
 };
 pub use std::vec::Vec;
 

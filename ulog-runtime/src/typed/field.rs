@@ -148,16 +148,17 @@ impl Element for bool {
     }
 }
 
-impl<T: ULog> Element for T {
-    const KIND: TypedKind = TypedKind::Nested(&T::FORMAT);
-    #[inline]
-    fn encode_element(&self, out: &mut Vec<u8>) {
-        ULog::encode(self, out);
-    }
-    #[inline]
-    fn decode_at(plan: &FieldPlan, row: &[u8], offset: usize) -> T {
-        T::decode(plan.nested_plan(), &row[offset..])
-    }
+/// What `#[derive(ULog)]` puts in its `Element` impl: a nested type's kind...
+#[doc(hidden)]
+pub const fn nested_kind<T: ULog>() -> TypedKind {
+    TypedKind::Nested(&T::FORMAT)
+}
+
+/// ...and its decoding at an offset, through the field's nested plan.
+#[doc(hidden)]
+#[inline]
+pub fn decode_nested<T: ULog>(plan: &FieldPlan, row: &[u8], offset: usize) -> T {
+    T::decode(plan.nested_plan(), &row[offset..])
 }
 
 impl<E: Element> FieldValue for E {

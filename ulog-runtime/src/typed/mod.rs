@@ -7,7 +7,7 @@
 //! them.
 
 mod check;
-mod field;
+pub(crate) mod field;
 mod view;
 
 pub use check::{DecodePlan, FieldPlan, Mismatch, MismatchKind, TypedDecoder, TypedError};

@@ -1,0 +1,6 @@
+use ulog_runtime::ULog;
+
+#[derive(ULog)]
+struct Heartbeat;
+
+fn main() {}
