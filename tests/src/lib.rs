@@ -127,7 +127,7 @@ impl Diffs {
 }
 
 /// Whether an oracle number (or "NaN"/"Infinity" string, or int8 for bool and char) is `v`.
-fn scalar_matches(json: &Json, v: Scalar) -> bool {
+pub fn scalar_matches(json: &Json, v: Scalar) -> bool {
     match v {
         Scalar::Float(_) | Scalar::Double(_) => {
             let ours = v.as_f64();
