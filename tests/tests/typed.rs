@@ -12,7 +12,7 @@ use serde_json::Value as Json;
 use ulog_runtime::schema::Schema;
 use ulog_runtime::typed::{TypedDecoder, encode_row};
 use ulog_runtime::value::RowPlan;
-use ulog_runtime::{Event, Log, Scalar, StreamReader, Topic, TypedError, ULog};
+use ulog_runtime::{Chars, Event, Log, Scalar, StreamReader, Topic, TypedError, ULog};
 use ulog_tests::{corpus_files, oracle, pyulog_blind_ranges, scalar_matches, short_name};
 
 /// Reads every PX4 generation's attitude: `rollspeed` left the topic in 2018 and
@@ -95,8 +95,11 @@ struct EscStatus {
     esc: [EscReport; 8],
 }
 
+/// A row as named columns.
+type Columns = BTreeMap<String, Scalar>;
+
 /// Named columns of a typed value: encoded under its own format, read dynamically.
-fn columns<T: ULog>(value: &T) -> BTreeMap<String, Scalar> {
+fn columns<T: ULog>(value: &T) -> Columns {
     let mut schema = Schema::new();
     for f in T::FORMAT.formats() {
         schema.insert(f).unwrap();
@@ -177,7 +180,7 @@ fn check_topic<T: Topic + Clone>(refuse: impl Fn(&Path) -> Option<String>) -> Ta
                 for row in log.rows(sub) {
                     let value = decoder.decode_row(&row).unwrap();
                     // Every column the struct has equals the dynamic reader's column.
-                    let dynamic: BTreeMap<String, Scalar> = row
+                    let dynamic: Columns = row
                         .plan()
                         .unwrap()
                         .columns(row.schema())
@@ -393,4 +396,279 @@ fn absent_topics_are_named() {
             }
         );
     }
+}
+
+/// Nested, with padding inside and at its end.
+#[derive(ULog, Debug, Clone, Copy, PartialEq)]
+struct Motor {
+    rpm: i32,
+    #[ulog(padding)]
+    _pad0: [u8; 2],
+    temperature: i16,
+    armed: bool,
+    tag: Chars<3>,
+    currents: [f32; 2],
+    #[ulog(padding)]
+    _pad1: [u8; 3],
+}
+
+/// A topic with inner padding, an array of nested types and trailing padding.
+#[derive(ULog, Debug, Clone, PartialEq)]
+#[ulog(name = "motor_status")]
+struct MotorStatus {
+    timestamp: u64,
+    count: u8,
+    #[ulog(padding)]
+    _pad: [u8; 7],
+    motors: [Motor; 3],
+    voltage: f64,
+    #[ulog(padding)]
+    _tail: [u8; 4],
+}
+
+/// Every basic type, arrays of them, extreme values.
+#[derive(ULog, Debug, Clone, PartialEq)]
+struct Mixed {
+    timestamp: u64,
+    d: f64,
+    i: i64,
+    u: u16,
+    s: i8,
+    name: Chars<5>,
+    v: [f32; 3],
+    flags: [bool; 2],
+    big: u64,
+    small: u32,
+    neg: i16,
+    byte: u8,
+}
+
+fn motor_status(i: u64, instance: u8) -> MotorStatus {
+    let motor = |m: u8| Motor {
+        rpm: 1_000 * i32::from(m) - i as i32 * 7 + i32::from(instance),
+        _pad0: [0; 2],
+        temperature: -(i as i16) * 3,
+        armed: (i + u64::from(m)).is_multiple_of(2),
+        tag: Chars::new(["m0", "m1x", "m"][usize::from(m)]).unwrap(),
+        currents: [i as f32 / 7.0, -(f32::from(m)) * 0.1],
+        _pad1: [0; 3],
+    };
+    MotorStatus {
+        timestamp: 1_000_000 + i * 10_000 + u64::from(instance),
+        count: 3,
+        _pad: [0; 7],
+        motors: [motor(0), motor(1), motor(2)],
+        voltage: 16.8 - i as f64 * 0.01,
+        _tail: [0; 4],
+    }
+}
+
+fn mixed(i: u64) -> Mixed {
+    let special = [
+        f32::NAN,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        -0.0,
+        f32::MIN_POSITIVE,
+    ];
+    Mixed {
+        timestamp: 1_000_500 + i * 10_000,
+        d: if i == 3 { f64::NAN } else { i as f64 / 3.0 },
+        i: i64::MIN + i as i64,
+        u: u16::MAX - i as u16,
+        s: i8::MIN + i as i8,
+        name: Chars::new(&"abcde"[..(i as usize % 6)]).unwrap(),
+        v: [special[i as usize % 5], i as f32 * 1e30, -(i as f32)],
+        flags: [i.is_multiple_of(2), i.is_multiple_of(3)],
+        big: u64::MAX - i,
+        small: u32::MAX / (i as u32 + 1),
+        neg: i16::MIN + i as i16,
+        byte: (i * 13) as u8,
+    }
+}
+
+/// A file written from derived structs, with every message type around the rows; returns the
+/// rows written per `topic/multi_id`, as named columns.
+fn typed_interop_file() -> (Vec<u8>, BTreeMap<String, Vec<Columns>>) {
+    use ulog_runtime::read::ParamValue;
+    use ulog_runtime::{Value, Writer, WriterOptions};
+    let options = WriterOptions {
+        start_timestamp: 999_000,
+        default_parameters: true,
+    };
+    let mut w = Writer::new(Vec::new(), options).unwrap();
+    w.info("sys_name", &Value::String("typed".into())).unwrap();
+    w.info("ver_hw", &Value::Scalar(Scalar::Int32(-5))).unwrap();
+    w.multi_info("boot", &Value::String("part one".into()), false)
+        .unwrap();
+    w.multi_info("boot", &Value::String(", part two".into()), true)
+        .unwrap();
+    w.parameter("MPC_XY_P", ParamValue::Float(0.95)).unwrap();
+    w.parameter("SYS_AUTOSTART", ParamValue::Int32(4001))
+        .unwrap();
+    w.default_parameter("MPC_XY_P", ParamValue::Float(1.0), 2)
+        .unwrap();
+    w.define::<MotorStatus>().unwrap();
+    w.define::<Mixed>().unwrap();
+    let motors = [
+        w.topic::<MotorStatus>(0).unwrap(),
+        w.topic::<MotorStatus>(1).unwrap(),
+    ];
+    let mix = w.topic::<Mixed>(0).unwrap();
+    let mut written: BTreeMap<String, Vec<Columns>> = BTreeMap::new();
+    for i in 0..25u64 {
+        for (k, sub) in motors.iter().enumerate() {
+            let value = motor_status(i, k as u8);
+            w.write(sub, &value).unwrap();
+            written
+                .entry(format!("motor_status/{k}"))
+                .or_default()
+                .push(columns(&value));
+        }
+        let value = mixed(i);
+        w.write(&mix, &value).unwrap();
+        written
+            .entry("mixed/0".into())
+            .or_default()
+            .push(columns(&value));
+        if i == 12 {
+            w.log(b'4', 1_120_000, "warning halfway").unwrap();
+            w.log_tagged(b'6', 3, 1_120_001, "tagged info").unwrap();
+            w.parameter("MPC_XY_P", ParamValue::Float(1.25)).unwrap();
+            w.sync().unwrap();
+            w.dropout(17).unwrap();
+        }
+    }
+    w.unsubscribe(motors[1].id()).unwrap();
+    (w.into_inner(), written)
+}
+
+#[test]
+fn pyulog_reads_every_value_written_from_derived_structs() {
+    use std::process::Command;
+    let (bytes, written) = typed_interop_file();
+    let sha: String = {
+        use sha2::{Digest, Sha256};
+        Sha256::digest(&bytes)
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect()
+    };
+    let dir = std::env::temp_dir().join(format!("ulog-typed-interop-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("typed.ulg");
+    std::fs::write(&path, &bytes).unwrap();
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("py/dump_values.py");
+    let committed_path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("data/typed_interop.pyulog.json");
+    let live = Command::new("python3")
+        .arg(&script)
+        .arg(&path)
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8(o.stdout).unwrap());
+    std::fs::remove_dir_all(&dir).unwrap();
+    let text = match live {
+        Some(text) => {
+            if std::env::var_os("ULOG_REFRESH").is_some() {
+                std::fs::write(&committed_path, &text).unwrap();
+            }
+            text
+        }
+        None => {
+            assert!(
+                !ulog_tests::under_ci(),
+                "under CI pyulog must be installed (.ci/run does it)"
+            );
+            eprintln!("pyulog not available: using its committed view of this file");
+            std::fs::read_to_string(&committed_path).unwrap()
+        }
+    };
+    let p: Json = serde_json::from_str(&text).unwrap();
+    assert_eq!(
+        p["sha256"].as_str(),
+        Some(sha.as_str()),
+        "the writer's output changed: refresh with ULOG_REFRESH=1 (pyulog installed)"
+    );
+    assert_eq!(p["printed"], "", "pyulog printed warnings");
+
+    // Every row of every instance, every column, every value.
+    let data = p["data"].as_object().unwrap();
+    assert_eq!(
+        data.keys().collect::<Vec<_>>(),
+        written.keys().collect::<Vec<_>>()
+    );
+    let mut values = 0;
+    for (key, rows) in &written {
+        let theirs = data[key].as_object().unwrap();
+        // pyulog also shows inner padding: zeros, as written.
+        let (padding, theirs): (Vec<_>, Vec<_>) =
+            theirs.iter().partition(|(col, _)| col.contains("_padding"));
+        assert!(!padding.is_empty() || key == "mixed/0");
+        for (col, column) in padding {
+            assert!(
+                column.as_array().unwrap().iter().all(|v| v == 0),
+                "{key} {col}"
+            );
+        }
+        let ours: Vec<&String> = rows[0].keys().collect();
+        assert_eq!(
+            theirs.iter().map(|(c, _)| *c).collect::<Vec<_>>(),
+            ours,
+            "{key}: columns"
+        );
+        for (col, column) in theirs {
+            let column = column.as_array().unwrap();
+            assert_eq!(column.len(), rows.len(), "{key}: rows");
+            for (r, row) in rows.iter().enumerate() {
+                let v = row[col];
+                assert!(
+                    scalar_matches(&column[r], v),
+                    "{key} row {r} {col}: wrote {v}, pyulog {}",
+                    column[r]
+                );
+                values += 1;
+            }
+        }
+    }
+    assert_eq!(
+        values,
+        2 * 25 * written["motor_status/0"][0].len() + 25 * written["mixed/0"][0].len()
+    );
+
+    // The other message types around the rows.
+    assert_eq!(p["info"]["sys_name"], "typed");
+    assert_eq!(p["info"]["ver_hw"], -5);
+    assert_eq!(
+        p["info_multiple"]["boot"],
+        serde_json::json!([["part one", ", part two"]])
+    );
+    assert_eq!(p["initial_parameters"]["SYS_AUTOSTART"], 4001);
+    assert_eq!(p["initial_parameters"]["MPC_XY_P"], 0.949999988079071);
+    assert_eq!(p["changed_parameters"][0][1], "MPC_XY_P");
+    assert_eq!(p["changed_parameters"][0][2], 1.25);
+    assert_eq!(p["default_parameters"]["1"]["MPC_XY_P"], 1.0);
+    assert_eq!(
+        p["logged_messages"],
+        serde_json::json!([[52, 1_120_000, "warning halfway"]])
+    );
+    assert_eq!(
+        p["logged_messages_tagged"]["3"],
+        serde_json::json!([[54, 1_120_001, "tagged info"]])
+    );
+    assert_eq!(p["dropouts"], serde_json::json!([17]));
+
+    // And this reader reads the same rows back as the structs written.
+    let log = Log::from_slice(&bytes).unwrap();
+    let back: Vec<MotorStatus> = log
+        .topic::<MotorStatus>()
+        .unwrap()
+        .instance(1)
+        .unwrap()
+        .collect();
+    assert_eq!(
+        back,
+        (0..25).map(|i| motor_status(i, 1)).collect::<Vec<_>>()
+    );
 }

@@ -235,7 +235,7 @@ fn absent_topics_are_their_own_errors() {
         "the file has no format `sensor` (wanted by struct ExactSensor)"
     );
     let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
-    w.formats_of::<ExactSensor>().unwrap();
+    w.define::<ExactSensor>().unwrap();
     let sub = w.topic::<EscStatus>(1).unwrap();
     w.write(
         &sub,
@@ -349,4 +349,27 @@ fn a_second_layout_under_one_name_is_refused_and_the_file_stays_valid() {
     let log = Log::from_vec(w.into_inner()).unwrap();
     assert!(log.diagnostics().is_empty(), "{:?}", log.diagnostics());
     assert_eq!(log.topic::<EscStatus>().unwrap().rows().count(), 1);
+}
+
+#[test]
+fn formats_after_the_definitions_section_are_refused() {
+    #[derive(ULog)]
+    struct Late {
+        timestamp: u64,
+    }
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    let a = w.topic::<EscStatus>(0).unwrap();
+    let err = w.topic::<Late>(0).unwrap_err();
+    assert!(
+        matches!(&err, crate::WriteError::DefinitionsClosed(n) if n == "late"),
+        "{err}"
+    );
+    // Formats already written stay usable: a second instance of the same topic.
+    let b = w.topic::<EscStatus>(1).unwrap();
+    w.write(&a, &status(1, 1)).unwrap();
+    w.write(&b, &status(2, 2)).unwrap();
+    let log = Log::from_vec(w.into_inner()).unwrap();
+    assert!(log.diagnostics().is_empty());
+    assert_eq!(log.topic::<EscStatus>().unwrap().rows().count(), 2);
+    assert!(log.metadata().schema().get("late").is_none());
 }

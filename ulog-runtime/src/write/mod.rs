@@ -63,6 +63,14 @@ pub enum WriteError {
         /// Full size.
         max: usize,
     },
+    /// A new format after the definitions section ended (at the first subscription or logged
+    /// string): pyulog and PX4 tools would not see it.
+    #[error(
+        "format `{0}` comes too late: formats must be written before the first subscription or \
+         logged string (readers ignore them in the data section); define every type first, \
+         e.g. with `Writer::define::<T>()`"
+    )]
+    DefinitionsClosed(String),
     /// All 65,536 `msg_id`s are used.
     #[error("all 65536 msg_ids are used")]
     TooManySubscriptions,
@@ -167,6 +175,8 @@ pub struct Writer<W: Write> {
     subscriptions: Vec<Option<Subscribed>>,
     next_msg_id: u32,
     default_parameters: bool,
+    /// Whether the data section has begun (an `A`, `L` or `C` was written).
+    data_section: bool,
     buf: Vec<u8>,
     row: Vec<u8>,
 }
@@ -180,6 +190,7 @@ impl<W: Write> Writer<W> {
             subscriptions: Vec::new(),
             next_msg_id: 0,
             default_parameters: options.default_parameters,
+            data_section: false,
             buf: Vec::with_capacity(256),
             row: Vec::with_capacity(256),
         };
@@ -227,6 +238,8 @@ impl<W: Write> Writer<W> {
     /// Writes a format definition (`F`) from its string, e.g.
     /// `vehicle_attitude:uint64_t timestamp;float[4] q;`. A format already written with the
     /// same definition is not written again; a different one under the same name is refused.
+    /// Formats belong to the definitions section: a new one after the first subscription or
+    /// logged string is refused ([`WriteError::DefinitionsClosed`]).
     pub fn format(&mut self, text: &str) -> Result<FormatId, WriteError> {
         let format = Format::parse(text).map_err(|error| WriteError::InvalidFormat {
             text: text.to_owned(),
@@ -237,10 +250,12 @@ impl<W: Write> Writer<W> {
 
     /// Writes a format definition (`F`); see [`Writer::format`].
     pub fn write_format(&mut self, format: Format) -> Result<FormatId, WriteError> {
-        if let Some(id) = self.schema.id(&format.name)
-            && *self.schema.format(id) == format
-        {
-            return Ok(id);
+        if let Some(id) = self.schema.id(&format.name) {
+            if *self.schema.format(id) == format {
+                return Ok(id);
+            }
+        } else if self.data_section {
+            return Err(WriteError::DefinitionsClosed(format.name));
         }
         let text = format.to_string();
         let id = self.schema.insert(format)?;
@@ -333,6 +348,7 @@ impl<W: Write> Writer<W> {
             msg_id,
             name: format.as_bytes(),
         })?;
+        self.data_section = true;
         self.next_msg_id += 1;
         self.subscriptions.push(Some(Subscribed {
             topic: format.to_owned(),
@@ -343,8 +359,21 @@ impl<W: Write> Writer<W> {
     }
 
     /// Writes the formats of a [`ULog`] type (nested ones first, each once) without
-    /// subscribing it; [`Writer::topic`] does this itself.
-    pub fn formats_of<T: ULog>(&mut self) -> Result<FormatId, WriteError> {
+    /// subscribing it. [`Writer::topic`] does this itself, but formats must all come before
+    /// the first subscription: with several topics, define each first.
+    ///
+    /// ```
+    /// # use ulog_runtime::{ULog, Writer, WriterOptions};
+    /// # #[derive(ULog)] struct Gps { timestamp: u64, alt: f32 }
+    /// # #[derive(ULog)] struct Baro { timestamp: u64, pressure: f32 }
+    /// let mut w = Writer::new(Vec::new(), WriterOptions::default())?;
+    /// w.define::<Gps>()?;
+    /// w.define::<Baro>()?;
+    /// let gps = w.topic::<Gps>(0)?;
+    /// let baro = w.topic::<Baro>(0)?;
+    /// # Ok::<(), ulog_runtime::WriteError>(())
+    /// ```
+    pub fn define<T: ULog>(&mut self) -> Result<FormatId, WriteError> {
         let mut last = None;
         for format in T::FORMAT.formats() {
             last = Some(self.write_format(format)?);
@@ -353,8 +382,9 @@ impl<W: Write> Writer<W> {
     }
 
     /// Subscribes a typed topic as instance `multi_id`, writing its formats first (nested ones
-    /// included, each once per file). A different format already written under one of its
-    /// names is refused.
+    /// included, each once per file) unless [`Writer::define`] already did. A different format
+    /// already written under one of its names is refused, and so is a new format after the
+    /// definitions section ended (see [`Writer::define`]).
     ///
     /// ```
     /// use ulog_runtime::{Chars, ULog, Writer, WriterOptions};
@@ -379,7 +409,7 @@ impl<W: Write> Writer<W> {
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn topic<T: Topic>(&mut self, multi_id: u8) -> Result<TypedSubscription<T>, WriteError> {
-        self.formats_of::<T>()?;
+        self.define::<T>()?;
         let id = self.subscribe(T::FORMAT.name, multi_id)?;
         Ok(TypedSubscription {
             id,
@@ -440,7 +470,9 @@ impl<W: Write> Writer<W> {
             tag: None,
             timestamp,
             text: text.as_bytes(),
-        })
+        })?;
+        self.data_section = true;
+        Ok(())
     }
 
     /// Writes a tagged logged string (`C`).
@@ -456,7 +488,9 @@ impl<W: Write> Writer<W> {
             tag: Some(tag),
             timestamp,
             text: text.as_bytes(),
-        })
+        })?;
+        self.data_section = true;
+        Ok(())
     }
 
     /// Writes a sync message (`S`), which lets readers recover from corruption.
@@ -594,6 +628,7 @@ impl Writer<std::fs::File> {
             subscriptions,
             next_msg_id,
             default_parameters: bits.has_default_parameters(),
+            data_section: true,
             buf: Vec::with_capacity(256),
             row: Vec::with_capacity(256),
         })
