@@ -15,13 +15,52 @@
 //!   the `scan` example does);
 //! - `open_then_decode`: `open`, then the leaves decoded from the index (`Scan::log`);
 //! - `stream_leaves`: the same through `StreamReader` (memory bounded by a few messages).
+//! - `typed_sensor_combined`: every `sensor_combined` row of the opened log decoded into a
+//!   derived struct (`Log::topic`, check included), against `dynamic_sensor_combined`: the
+//!   same rows' leaves through the dynamic plan. Both count rows/s and bytes of those rows.
 
 use std::hint::black_box;
 use std::sync::OnceLock;
 
 use divan::Bencher;
-use divan::counter::BytesCount;
-use ulog_runtime::Log;
+use divan::counter::{BytesCount, ItemsCount};
+use ulog_runtime::{Log, ULog};
+
+/// `sensor_combined` as PX4 v1.13 logs it (the benchmark's source log), every field.
+#[derive(ULog)]
+struct SensorCombined {
+    timestamp: u64,
+    gyro_rad: [f32; 3],
+    gyro_integral_dt: u32,
+    accelerometer_timestamp_relative: i32,
+    accelerometer_m_s2: [f32; 3],
+    accelerometer_integral_dt: u32,
+    accelerometer_clipping: u8,
+    gyro_clipping: u8,
+    accel_calibration_count: u8,
+    gyro_calibration_count: u8,
+}
+
+fn opened() -> &'static Log<'static> {
+    static LOG: OnceLock<Log<'static>> = OnceLock::new();
+    LOG.get_or_init(|| {
+        let log = Log::from_slice(big()).expect("the benchmark log reads");
+        // Build the row index once, outside the measurements.
+        for sub in log.subscriptions() {
+            black_box(log.rows(sub).len());
+        }
+        log
+    })
+}
+
+/// Rows and bytes of `sensor_combined` in the benchmark log.
+fn sensor_combined_size(log: &Log<'_>) -> (usize, usize) {
+    let sub = log.subscription("sensor_combined", 0).expect("logged");
+    (
+        log.rows(sub).len(),
+        log.rows(sub).map(|r| r.data.len()).sum(),
+    )
+}
 
 fn big() -> &'static [u8] {
     static BIG: OnceLock<Vec<u8>> = OnceLock::new();
@@ -105,4 +144,40 @@ fn stream_leaves(b: Bencher) {
     let data = big();
     b.counter(BytesCount::new(data.len()))
         .bench_local(|| black_box(examples::Scan::stream(black_box(data)).unwrap().all));
+}
+
+#[divan::bench(sample_count = 10, sample_size = 1)]
+fn typed_sensor_combined(b: Bencher) {
+    let log = opened();
+    let (rows, bytes) = sensor_combined_size(log);
+    b.counter(ItemsCount::new(rows))
+        .counter(BytesCount::new(bytes))
+        .bench_local(|| {
+            let topic = log
+                .topic::<SensorCombined>()
+                .expect("matches the source log");
+            let mut sum = 0.0f64;
+            for row in topic.instance(0).expect("instance 0") {
+                sum += f64::from(row.accelerometer_m_s2[2] + row.gyro_rad[0])
+                    + row.timestamp as f64
+                    + f64::from(row.gyro_integral_dt + u32::from(row.gyro_clipping));
+            }
+            black_box(sum)
+        });
+}
+
+#[divan::bench(sample_count = 10, sample_size = 1)]
+fn dynamic_sensor_combined(b: Bencher) {
+    let log = opened();
+    let (rows, bytes) = sensor_combined_size(log);
+    let sub = log.subscription("sensor_combined", 0).expect("logged");
+    b.counter(ItemsCount::new(rows))
+        .counter(BytesCount::new(bytes))
+        .bench_local(|| {
+            let mut sum = 0.0f64;
+            for row in log.rows(sub) {
+                row.for_each_leaf(|v| sum += v.as_f64());
+            }
+            black_box(sum)
+        });
 }

@@ -257,7 +257,7 @@ fn check_topic<T: Topic + Clone>(refuse: impl Fn(&Path) -> Option<String>) -> Ta
         while let Some(event) = reader.next_event().unwrap() {
             match event {
                 Event::Subscription(s) if s.name == topic && decoder.is_none() => {
-                    decoder = Some(TypedDecoder::new(reader.metadata().schema()).unwrap());
+                    decoder = Some(reader.typed::<T>().unwrap());
                 }
                 Event::Row(row) => {
                     if let Some(v) = decoder.as_ref().and_then(|d| d.decode_row(&row)) {

@@ -572,6 +572,15 @@ impl<'a> Log<'a> {
         })
     }
 
+    /// The data of row number `i` (no subscription lookup, no timestamp).
+    #[inline(always)]
+    pub(crate) fn row_data(&self, i: usize) -> &[u8] {
+        let bytes = self.bytes.as_slice();
+        let at = self.index.get(i).0 as usize;
+        let size = usize::from(u16::from_le_bytes([bytes[at], bytes[at + 1]]));
+        &bytes[at + MESSAGE_HEADER_LEN + 2..at + MESSAGE_HEADER_LEN + size]
+    }
+
     /// Row number `i`, whose message is at `at`.
     #[inline(always)]
     fn row_at(&self, i: usize, at: u64) -> Row<'_> {

@@ -9,6 +9,7 @@ use super::{
     Diagnostic, Dropout, LoggedMessage, Metadata, ParameterChange, ReadError, Row, Step,
     Subscription, Walker,
 };
+use crate::typed::{Topic, TypedDecoder, TypedError};
 
 /// Bytes read from the input at a time.
 const CHUNK: usize = 64 * 1024;
@@ -110,6 +111,39 @@ impl<R: Read> StreamReader<R> {
     /// Everything read so far but the data rows.
     pub fn metadata(&self) -> &Metadata {
         &self.walker.meta
+    }
+
+    /// A checked decoder for topic `T` against the formats read so far: make it once the
+    /// definitions are read, e.g. at the topic's [`Event::Subscription`], then decode its rows
+    /// with [`TypedDecoder::decode_row`].
+    ///
+    /// ```no_run
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use ulog_runtime::{Event, StreamReader, ULog};
+    ///
+    /// #[derive(ULog)]
+    /// struct VehicleAttitude { timestamp: u64, q: [f32; 4] }
+    ///
+    /// let file = std::io::BufReader::new(std::fs::File::open("flight.ulg")?);
+    /// let mut reader = StreamReader::new(file)?;
+    /// let mut decoder = None;
+    /// while let Some(event) = reader.next_event()? {
+    ///     match event {
+    ///         Event::Subscription(s) if s.name == "vehicle_attitude" && decoder.is_none() => {
+    ///             decoder = Some(reader.typed::<VehicleAttitude>()?);
+    ///         }
+    ///         Event::Row(row) => {
+    ///             if let Some(att) = decoder.as_ref().and_then(|d| d.decode_row(&row)) {
+    ///                 println!("{} {:?}", att.timestamp, att.q);
+    ///             }
+    ///         }
+    ///         _ => {}
+    ///     }
+    /// }
+    /// # Ok(()) }
+    /// ```
+    pub fn typed<T: Topic>(&self) -> Result<TypedDecoder<T>, TypedError> {
+        TypedDecoder::new(self.metadata().schema())
     }
 
     /// The next event, or `None` at the end of the file.

@@ -1,10 +1,83 @@
-//! Typed topics: Rust structs that map to ULog formats ([`ULog`]), the field types they may
-//! use ([`FieldValue`]), and the runtime check that compares a struct with a file's own format
-//! once and yields a [`DecodePlan`], after which decoding a row is offset reads only.
+//! Typed topics: Rust structs as ULog formats.
 //!
-//! `#[derive(ULog)]` writes the [`ULog`] (and, for structs with a `timestamp`, [`Topic`])
-//! impls; [`Log::topic`](crate::Log::topic) and [`Writer::topic`](crate::Writer::topic) use
-//! them.
+//! `#[derive(ULog)]` on a struct with named fields implements [`ULog`]: the format (name,
+//! fields, the formats it nests), the packed little-endian encoder, and a decoder that reads
+//! through a [`DecodePlan`]. A struct with a `timestamp` field also implements [`Topic`], so it
+//! can be written ([`Writer::topic`](crate::Writer::topic)) and read
+//! ([`Log::topic`](crate::Log::topic), [`TypedDecoder`] with a [`StreamReader`](crate::StreamReader)).
+//!
+//! ```
+//! use ulog_runtime::{Chars, ULog};
+//!
+//! #[derive(ULog, Debug, Clone, Copy)]
+//! struct EscReport {                    // nested only: no timestamp needed
+//!     esc_rpm: i32,
+//!     esc_voltage: f32,
+//!     #[ulog(padding)]
+//!     _pad: [u8; 3],
+//! }
+//!
+//! #[derive(ULog, Debug)]
+//! #[ulog(name = "esc_status")]
+//! struct EscStatus {
+//!     timestamp: u64,
+//!     esc_count: u8,
+//!     esc: [EscReport; 8],
+//!     name: Chars<10>,
+//!     temperature: Option<f32>,         // files without it read as None
+//! }
+//!
+//! assert_eq!(
+//!     EscStatus::FORMAT.to_format().to_string(),
+//!     "esc_status:uint64_t timestamp;uint8_t esc_count;esc_report[8] esc;char[10] name;float temperature;"
+//! );
+//! ```
+//!
+//! # Field types
+//!
+//! | Rust | ULog |
+//! |---|---|
+//! | `u8` `i8` `u16` `i16` `u32` `i32` `u64` `i64` `f32` `f64` | `uint8_t` ... `int64_t`, `float`, `double` |
+//! | `bool` | `bool` (any non-zero byte reads as `true`) |
+//! | [`Chars<N>`] | `char[N]`, text without terminator when it fills the array |
+//! | `[T; N]` of the above (not `Chars`) or of a nested type | `type[N]` |
+//! | a struct deriving `ULog` | the nested format (its own name) |
+//! | `Option<T>` of any of these | the same type; absent from a file → `None`, written as zeros |
+//!
+//! Anything else (`String`, `Vec`, `usize`, `char`, references, arrays of arrays) does not
+//! compile: [`FieldValue`] and [`Element`] are implemented for exactly these types, and the
+//! derive has no type table of its own.
+//!
+//! # Attributes
+//!
+//! | attribute | on | effect |
+//! |---|---|---|
+//! | `#[ulog(name = "esc_status")]` | struct | the format name (default: the struct name in snake case) |
+//! | `#[ulog(exact)]` | struct | reading requires the file's format to be identical: fields, order, padding |
+//! | `#[ulog(crate = "path")]` | struct | where the runtime crate is, for code that renames `ulog-runtime` |
+//! | `#[ulog(rename = "type")]` | field | the field's name in the file |
+//! | `#[ulog(padding)]` | field (`[u8; N]`) | written as zeros and named `_paddingK` (K counts padding fields); trailing padding is left out of data rows, as PX4 does |
+//!
+//! Each key may appear once; every mistake of a struct is reported at once, at its span.
+//! The derive also refuses, at compile time: enums, unions, tuple and unit structs, generics,
+//! names the format grammar forbids, two fields with one name after renames, a `timestamp`
+//! that is not an unsigned integer, and a struct larger than one data message (65,533 bytes).
+//! Using a struct without `timestamp` as a topic does not compile (it is not a [`Topic`]).
+//!
+//! # The runtime check
+//!
+//! Reading compares the struct with the file's format of the same name, once, before any row
+//! ([`DecodePlan::check`]):
+//! - fields match by name, in any order; padding is skipped on both sides but its bytes count;
+//! - types and array lengths must be equal (no silent widening), nested types recursively;
+//! - fields only the file has are ignored; a struct field the file lacks is an error unless it
+//!   is an `Option`;
+//! - in exact mode any difference is an error.
+//!
+//! Every difference is reported in one [`TypedError::Mismatch`], e.g.
+//! `esc_status: esc[].esc_rpm is int32_t in the file, f32 in struct EscReport`. After the
+//! check, decoding a row is reads at offsets the plan holds: no allocation for fixed-size
+//! types, no lookups by name.
 
 mod check;
 pub(crate) mod field;

@@ -117,7 +117,10 @@ impl<'a, T: Topic> TypedTopic<'a, T> {
             log: self.log,
             heads: subs
                 .iter()
-                .map(|&i| self.log.row_numbers(i).iter())
+                .map(|&i| {
+                    let multi_id = self.log.subscriptions()[i].multi_id;
+                    (multi_id, self.log.row_numbers(i).iter())
+                })
                 .collect(),
         }
     }
@@ -127,27 +130,29 @@ impl<'a, T: Topic> TypedTopic<'a, T> {
 #[derive(Clone)]
 struct Merge<'a> {
     log: &'a Log<'a>,
-    heads: Vec<std::slice::Iter<'a, usize>>,
+    /// Each subscription's remaining row numbers, with its `multi_id`.
+    heads: Vec<(u8, std::slice::Iter<'a, usize>)>,
 }
 
 impl<'a> Merge<'a> {
+    /// The next row's `multi_id` and data.
     #[inline]
-    fn next(&mut self) -> Option<crate::Row<'a>> {
-        let n = match self.heads.as_mut_slice() {
-            [one] => *one.next()?,
+    fn next(&mut self) -> Option<(u8, &'a [u8])> {
+        let (multi_id, n) = match self.heads.as_mut_slice() {
+            [(m, one)] => (*m, *one.next()?),
             heads => {
-                let (_, head) = heads
+                let (_, (m, head)) = heads
                     .iter_mut()
-                    .filter_map(|h| h.as_slice().first().copied().map(|n| (n, h)))
+                    .filter_map(|h| h.1.as_slice().first().copied().map(|n| (n, h)))
                     .min_by_key(|(n, _)| *n)?;
-                *head.next()?
+                (*m, *head.next()?)
             }
         };
-        Some(self.log.row(n))
+        Some((multi_id, self.log.row_data(n)))
     }
 
     fn len(&self) -> usize {
-        self.heads.iter().map(|h| h.len()).sum()
+        self.heads.iter().map(|h| h.1.len()).sum()
     }
 }
 
@@ -163,9 +168,9 @@ impl<T: Topic> Iterator for TypedRows<'_, T> {
     #[inline]
     fn next(&mut self) -> Option<T> {
         loop {
-            let row = self.merge.next()?;
+            let (_, data) = self.merge.next()?;
             // Every row the log accepted is long enough for the checked plan.
-            if let Some(value) = self.decoder.decode(row.data) {
+            if let Some(value) = self.decoder.decode(data) {
                 return Some(value);
             }
         }
@@ -188,9 +193,9 @@ impl<T: Topic> Iterator for TopicRows<'_, T> {
     #[inline]
     fn next(&mut self) -> Option<(u8, T)> {
         loop {
-            let row = self.merge.next()?;
-            if let Some(value) = self.decoder.decode(row.data) {
-                return Some((row.subscription.multi_id, value));
+            let (multi_id, data) = self.merge.next()?;
+            if let Some(value) = self.decoder.decode(data) {
+                return Some((multi_id, value));
             }
         }
     }
