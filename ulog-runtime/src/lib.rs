@@ -26,6 +26,8 @@ extern crate self as ulog_runtime;
 
 #[doc(hidden)]
 pub mod __private;
+#[cfg(feature = "codegen")]
+pub mod codegen;
 mod error;
 pub mod read;
 pub mod schema;

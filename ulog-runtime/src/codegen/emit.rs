@@ -1,0 +1,345 @@
+//! Rust code for the resolved definitions: one struct per format, `#[derive(ULog)]` doing the
+//! rest. Built as tokens, formatted with prettyplease.
+
+use std::collections::{HashMap, HashSet};
+
+use proc_macro2::{Ident, Span, TokenStream};
+use quote::{format_ident, quote};
+
+use super::input::Definition;
+use super::{Builder, CodegenError};
+use crate::schema::{Field, Primitive, TypeRef, is_padding_name};
+
+/// Words Rust reserves: fields named so get a `_` suffix (and keep their ULog name).
+const KEYWORDS: &[&str] = &[
+    "as", "async", "await", "break", "const", "continue", "crate", "dyn", "else", "enum", "extern",
+    "false", "fn", "for", "gen", "if", "impl", "in", "let", "loop", "match", "mod", "move", "mut",
+    "pub", "ref", "return", "self", "static", "struct", "super", "trait", "true", "try", "type",
+    "unsafe", "use", "where", "while", "abstract", "become", "box", "do", "final", "macro",
+    "override", "priv", "typeof", "unsized", "virtual", "yield",
+];
+
+/// `vehicle_attitude` -> `VehicleAttitude`, `GPS-data/raw` -> `GpsDataRaw`.
+pub(crate) fn type_name(name: &str) -> String {
+    let mut out = String::new();
+    for part in name.split(|c: char| !c.is_ascii_alphanumeric()) {
+        let mut chars = part.chars();
+        if let Some(first) = chars.next() {
+            out.push(first.to_ascii_uppercase());
+            out.extend(chars.map(|c| c.to_ascii_lowercase()));
+        }
+    }
+    if out.is_empty() || out.starts_with(|c: char| c.is_ascii_digit()) {
+        out.insert(0, 'T');
+    }
+    if out == "Self" {
+        out.push('_');
+    }
+    out
+}
+
+/// `airspeedSp` -> `airspeed_sp`, `R_body` -> `r_body`, `type` -> `type_`, `5v` -> `f_5v`.
+pub(crate) fn field_name(name: &str) -> String {
+    let chars: Vec<char> = name.chars().collect();
+    let mut out = String::with_capacity(name.len() + 4);
+    for (i, &c) in chars.iter().enumerate() {
+        if c.is_ascii_uppercase() && i > 0 {
+            let prev = chars[i - 1];
+            let next_lower = chars.get(i + 1).is_some_and(char::is_ascii_lowercase);
+            if prev.is_ascii_lowercase() || (prev.is_ascii_uppercase() && next_lower) {
+                out.push('_');
+            }
+        }
+        out.push(c.to_ascii_lowercase());
+    }
+    if out.is_empty() || out.starts_with(|c: char| c.is_ascii_digit()) {
+        out.insert_str(0, "f_");
+    }
+    if KEYWORDS.contains(&out.as_str()) {
+        out.push('_');
+    }
+    out
+}
+
+/// Unique names: a second `name` becomes `name_2`, and so on.
+fn unique(name: String, taken: &mut HashSet<String>) -> String {
+    let mut candidate = name.clone();
+    let mut n = 2;
+    while !taken.insert(candidate.clone()) {
+        candidate = format!("{name}_{n}");
+        n += 1;
+    }
+    candidate
+}
+
+fn rust_primitive(p: Primitive) -> &'static str {
+    match p {
+        Primitive::Int8 => "i8",
+        Primitive::UInt8 => "u8",
+        Primitive::Int16 => "i16",
+        Primitive::UInt16 => "u16",
+        Primitive::Int32 => "i32",
+        Primitive::UInt32 => "u32",
+        Primitive::Int64 => "i64",
+        Primitive::UInt64 => "u64",
+        Primitive::Float => "f32",
+        Primitive::Double => "f64",
+        Primitive::Bool => "bool",
+        Primitive::Char => "u8",
+    }
+}
+
+fn parse<T: syn::parse::Parse>(what: &'static str, value: &str) -> Result<T, CodegenError> {
+    syn::parse_str(value).map_err(|e| CodegenError::InvalidOption {
+        what,
+        value: value.to_owned(),
+        message: e.to_string(),
+    })
+}
+
+/// Where generated code finds a type of another definition.
+struct Names {
+    types: HashMap<String, String>,
+    modules: HashMap<String, String>,
+}
+
+pub(crate) fn render(
+    builder: &Builder,
+    defs: &[Definition],
+    inputs: &[String],
+) -> Result<String, CodegenError> {
+    let krate: syn::Path = parse("runtime crate path", &builder.runtime_crate)?;
+    let vis: syn::Visibility = parse("visibility", &builder.visibility)?;
+    let mut global_derives = Vec::new();
+    for d in &builder.derives {
+        global_derives.push(parse::<syn::Path>("derive", d)?);
+    }
+    let mut taken_types = HashSet::new();
+    let mut taken_modules = HashSet::new();
+    let mut names = Names {
+        types: HashMap::new(),
+        modules: HashMap::new(),
+    };
+    for def in defs {
+        let name = &def.format.name;
+        names
+            .types
+            .insert(name.clone(), unique(type_name(name), &mut taken_types));
+        names
+            .modules
+            .insert(name.clone(), unique(field_name(name), &mut taken_modules));
+    }
+    let mut items = Vec::new();
+    for def in defs {
+        let item = one_type(builder, def, &names, &krate, &vis, &global_derives)?;
+        if builder.module_per_topic {
+            let module = format_ident!("{}", names.modules[&def.format.name]);
+            let doc = format!(" The `{}` format.", def.format.name);
+            items.push(quote! {
+                #[doc = #doc]
+                #vis mod #module {
+                    #item
+                }
+            });
+        } else {
+            items.push(item);
+        }
+    }
+    let file: syn::File =
+        syn::parse2(quote!(#(#items)*)).map_err(|e| CodegenError::InvalidOption {
+            what: "generated code",
+            value: String::new(),
+            message: e.to_string(),
+        })?;
+    let mut out = format!(
+        "// @generated by ulog_runtime::codegen from {}. Do not edit.\n\n",
+        inputs.join(", ")
+    );
+    // A blank line between items, as rustfmt leaves them.
+    let code = prettyplease::unparse(&file).replace("\n}\n", "\n}\n\n");
+    out.push_str(code.trim_end());
+    out.push('\n');
+    Ok(out)
+}
+
+fn one_type(
+    builder: &Builder,
+    def: &Definition,
+    names: &Names,
+    krate: &syn::Path,
+    vis: &syn::Visibility,
+    global_derives: &[syn::Path],
+) -> Result<TokenStream, CodegenError> {
+    let format = &def.format;
+    let ident = Ident::new(&names.types[&format.name], Span::call_site());
+    let mut doc = Vec::new();
+    if let Some(text) = &def.doc {
+        doc.extend(text.lines().map(str::to_owned));
+        doc.push(String::new());
+    }
+    doc.push(format!("ULog format `{}` ({}):", format.name, def.place));
+    doc.push(format!("`{format}`"));
+    let name = &format.name;
+    let exact = def.exact.then(|| quote!(exact,));
+    let krate_text = quote!(#krate).to_string().replace(' ', "");
+    let mut derives: Vec<syn::Path> = Vec::new();
+    for d in &def.derives {
+        derives.push(parse("derive", d)?);
+    }
+    derives.extend(global_derives.iter().cloned());
+
+    let mut taken = HashSet::new();
+    let mut fields = Vec::new();
+    let mut bools = 0;
+    let mut underscore = false;
+    for field in &format.fields {
+        fields.push(one_field(
+            def,
+            field,
+            names,
+            krate,
+            vis,
+            builder,
+            &mut taken,
+            &mut bools,
+            &mut underscore,
+        )?);
+    }
+    let mut allows = Vec::new();
+    if bools > 3 {
+        allows.push(quote!(clippy::struct_excessive_bools));
+    }
+    if underscore {
+        allows.push(quote!(clippy::pub_underscore_fields));
+    }
+    let allow = (!allows.is_empty()).then(|| quote!(#[allow(#(#allows),*)]));
+    let doc = doc_lines(&doc);
+    Ok(quote! {
+        #(#[doc = #doc])*
+        #[derive(#krate::ULog, Debug, Clone, PartialEq #(, #derives)*)]
+        #[ulog(name = #name, #exact crate = #krate_text)]
+        #allow
+        #vis struct #ident {
+            #(#fields)*
+        }
+    })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn one_field(
+    def: &Definition,
+    field: &Field,
+    names: &Names,
+    krate: &syn::Path,
+    vis: &syn::Visibility,
+    builder: &Builder,
+    taken: &mut HashSet<String>,
+    bools: &mut usize,
+    underscore: &mut bool,
+) -> Result<TokenStream, CodegenError> {
+    let len = field.array_len.map(usize::from);
+    if is_padding_name(&field.name) {
+        // Padding is bytes whatever its declared type: its size is what counts.
+        let size = match &field.ty {
+            TypeRef::Primitive(p) => p.size() * len.unwrap_or(1),
+            TypeRef::Nested(_) => {
+                return Err(CodegenError::Unsupported {
+                    format: def.format.name.clone(),
+                    place: def.place.clone(),
+                    message: format!("padding field `{}` of a nested type", field.name),
+                });
+            }
+        };
+        let ident = format_ident!("{}", unique(field.name.clone(), taken));
+        let size = proc_macro2::Literal::usize_unsuffixed(size);
+        *underscore = true;
+        let doc = format!(" Padding: `{field}`.");
+        return Ok(quote! {
+            #[doc = #doc]
+            #[ulog(padding)]
+            #vis #ident: [u8; #size],
+        });
+    }
+    let element: TokenStream = match &field.ty {
+        TypeRef::Primitive(Primitive::Char) => {
+            let Some(n) = len else {
+                return Err(CodegenError::Unsupported {
+                    format: def.format.name.clone(),
+                    place: def.place.clone(),
+                    message: format!(
+                        "field `{}` is a single `char`; only `char[N]` arrays (text) are supported",
+                        field.name
+                    ),
+                });
+            };
+            let n = proc_macro2::Literal::usize_unsuffixed(n);
+            let chars = quote!(#krate::Chars<#n>);
+            return Ok(field_tokens(def, field, chars, vis, taken));
+        }
+        TypeRef::Primitive(p) => {
+            if *p == Primitive::Bool && len.is_none() {
+                *bools += 1;
+            }
+            let ty = format_ident!("{}", rust_primitive(*p));
+            quote!(#ty)
+        }
+        TypeRef::Nested(n) => {
+            let ty = format_ident!("{}", names.types[n]);
+            if builder.module_per_topic {
+                let module = format_ident!("{}", names.modules[n]);
+                quote!(super::#module::#ty)
+            } else {
+                quote!(#ty)
+            }
+        }
+    };
+    let ty = match len {
+        Some(n) => {
+            let n = proc_macro2::Literal::usize_unsuffixed(n);
+            quote!([#element; #n])
+        }
+        None => element,
+    };
+    Ok(field_tokens(def, field, ty, vis, taken))
+}
+
+fn field_tokens(
+    def: &Definition,
+    field: &Field,
+    ty: TokenStream,
+    vis: &syn::Visibility,
+    taken: &mut HashSet<String>,
+) -> TokenStream {
+    let rust = unique(field_name(&field.name), taken);
+    let ident = format_ident!("{rust}");
+    let mut doc = Vec::new();
+    if let Some(text) = def.field_docs.get(&field.name) {
+        doc.extend(text.lines().map(str::to_owned));
+        doc.push(String::new());
+    }
+    doc.push(format!("`{field}`"));
+    let doc = doc_lines(&doc);
+    let rename = (rust != field.name).then(|| {
+        let name = &field.name;
+        quote!(#[ulog(rename = #name)])
+    });
+    quote! {
+        #(#[doc = #doc])*
+        #rename
+        #vis #ident: #ty,
+    }
+}
+
+/// Doc lines as `///` comments print them: a space after the slashes.
+fn doc_lines(lines: &[String]) -> Vec<String> {
+    lines
+        .iter()
+        .map(|l| {
+            if l.is_empty() {
+                String::new()
+            } else {
+                format!(" {l}")
+            }
+        })
+        .collect()
+}
