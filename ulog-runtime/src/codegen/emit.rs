@@ -177,7 +177,7 @@ fn one_type(
         doc.extend(text.lines().map(str::to_owned));
         doc.push(String::new());
     }
-    doc.push(format!("ULog format `{}` ({}):", format.name, def.place));
+    doc.push(format!("`ULog` format `{}` ({}):", format.name, def.place));
     doc.push(format!("`{format}`"));
     let name = &format.name;
     let exact = def.exact.then(|| quote!(exact,));

@@ -129,11 +129,11 @@ pub enum CodegenError {
         /// The first definition.
         first: String,
         /// Where.
-        first_place: Place,
+        first_place: Box<Place>,
         /// The second definition.
         second: String,
         /// Where.
-        second_place: Place,
+        second_place: Box<Place>,
     },
     /// A nested type no input defines.
     #[error("`{format}` ({place}): field `{field}` has type `{type_name}`, which no input defines")]
@@ -340,9 +340,9 @@ impl Builder {
                         return Err(CodegenError::Redefinition {
                             name: def.format.name.clone(),
                             first: first.format.to_string(),
-                            first_place: first.place.clone(),
+                            first_place: Box::new(first.place.clone()),
                             second: def.format.to_string(),
-                            second_place: def.place,
+                            second_place: Box::new(def.place),
                         });
                     }
                     // The same definition again: keep the first, with any docs the second adds.
