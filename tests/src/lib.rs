@@ -4,6 +4,8 @@
 //! relative to the workspace root), searched recursively for `.ulg` files. Under CI
 //! (`CI=true`) a missing corpus fails the tests instead of skipping them.
 
+pub mod typed_check;
+
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::ops::Range;

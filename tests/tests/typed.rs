@@ -9,11 +9,10 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use serde_json::Value as Json;
-use ulog_runtime::schema::Schema;
-use ulog_runtime::typed::{TypedDecoder, encode_row};
-use ulog_runtime::value::RowPlan;
-use ulog_runtime::{Chars, Event, Log, Scalar, StreamReader, Topic, TypedError, ULog};
-use ulog_tests::{corpus_files, oracle, pyulog_blind_ranges, scalar_matches, short_name};
+use ulog_runtime::typed::encode_row;
+use ulog_runtime::{Chars, Log, Scalar, Topic, TypedError, ULog};
+use ulog_tests::typed_check::{Columns, check_typed_file, columns};
+use ulog_tests::{corpus_files, oracle, scalar_matches, short_name};
 
 /// Reads every PX4 generation's attitude: `rollspeed` left the topic in 2018 and
 /// `timestamp_sample` arrived in 2020.
@@ -95,40 +94,6 @@ struct EscStatus {
     esc: [EscReport; 8],
 }
 
-/// A row as named columns.
-type Columns = BTreeMap<String, Scalar>;
-
-/// Named columns of a typed value: encoded under its own format, read dynamically.
-fn columns<T: ULog>(value: &T) -> Columns {
-    let mut schema = Schema::new();
-    for f in T::FORMAT.formats() {
-        schema.insert(f).unwrap();
-    }
-    let id = schema.id(T::FORMAT.name).unwrap();
-    let plan = RowPlan::new(&mut schema, id).unwrap();
-    let mut row = Vec::new();
-    value.encode(&mut row);
-    let mut leaves = Vec::new();
-    assert!(plan.for_each_leaf(&row, |s| leaves.push(s)));
-    plan.columns(&schema)
-        .into_iter()
-        .zip(leaves)
-        .map(|(c, v)| (c.name, v))
-        .collect()
-}
-
-/// Values by their encodings (NaN equals itself there).
-fn encoded<'a, T: ULog + 'a>(values: impl IntoIterator<Item = &'a T>) -> Vec<Vec<u8>> {
-    values
-        .into_iter()
-        .map(|v| {
-            let mut out = Vec::new();
-            v.encode(&mut out);
-            out
-        })
-        .collect()
-}
-
 /// What one topic check found.
 #[derive(Default)]
 struct Tally {
@@ -139,7 +104,7 @@ struct Tally {
 
 /// Checks topic `T` in every corpus file whose oracle has data for it; `refuse` says which
 /// files' formats `T` must be refused for (with the error to expect).
-fn check_topic<T: Topic + Clone>(refuse: impl Fn(&Path) -> Option<String>) -> Tally {
+fn check_topic<T: Topic>(refuse: impl Fn(&Path) -> Option<String>) -> Tally {
     let mut tally = Tally::default();
     let mut failures = Vec::new();
     for path in corpus_files() {
@@ -166,112 +131,10 @@ fn check_topic<T: Topic + Clone>(refuse: impl Fn(&Path) -> Option<String>) -> Ta
             (Err(e), None) => panic!("{name}: {e}"),
         };
         tally.files += 1;
-        let blind = pyulog_blind_ranges(&log);
-        let decoder = typed.decoder();
-        for s in subs {
-            let multi_id = u8::try_from(s["multi_id"].as_u64().unwrap()).unwrap();
-            let from_topic: Vec<T> = typed.instance(multi_id).unwrap().collect();
-            // The same rows through the dynamic reader, each decoded by the typed decoder.
-            let mut ours = Vec::new();
-            for sub in log.subscriptions().iter().filter(|x| x.name == topic) {
-                if sub.multi_id != multi_id {
-                    continue;
-                }
-                for row in log.rows(sub) {
-                    let value = decoder.decode_row(&row).unwrap();
-                    // Every column the struct has equals the dynamic reader's column.
-                    let dynamic: Columns = row
-                        .plan()
-                        .unwrap()
-                        .columns(row.schema())
-                        .into_iter()
-                        .zip({
-                            let mut leaves = Vec::new();
-                            row.for_each_leaf(|l| leaves.push(l));
-                            leaves
-                        })
-                        .map(|(c, v)| (c.name, v))
-                        .collect();
-                    for (col, v) in columns(&value) {
-                        if let Some(d) = dynamic.get(&col)
-                            && !col.contains("_padding")
-                            && d.as_f64().to_bits() != v.as_f64().to_bits()
-                            && !(matches!(v, Scalar::Bool(_)))
-                        {
-                            failures.push(format!("{name} {topic} {col}: typed {v}, dynamic {d}"));
-                        }
-                    }
-                    let in_blind = blind.iter().any(|r| r.contains(&row.offset));
-                    ours.push((value, in_blind));
-                }
-            }
-            assert!(
-                encoded(&from_topic) == encoded(ours.iter().map(|(v, _)| v)),
-                "{name}: Log::topic and TypedDecoder::decode_row disagree"
-            );
-            let seen: Vec<T> = ours
-                .into_iter()
-                .filter(|(_, b)| !b)
-                .map(|(v, _)| v)
-                .collect();
-            assert_eq!(
-                seen.len() as u64,
-                s["n_data"].as_u64().unwrap(),
-                "{name} {topic}/{multi_id}: rows"
-            );
-            tally.rows += seen.len();
-            let n = seen.len();
-            let picks = (0..n.min(3)).map(|i| (&s["first_rows"][i], i)).chain(
-                (n.saturating_sub(3)..n)
-                    .enumerate()
-                    .map(|(j, i)| (&s["last_rows"][j], i)),
-            );
-            for (expected, i) in picks {
-                for (col, v) in columns(&seen[i]) {
-                    match expected.get(&col) {
-                        Some(e) => {
-                            tally.values += 1;
-                            if !scalar_matches(e, v) {
-                                failures.push(format!(
-                                    "{name} {topic}/{multi_id} row {i} {col}: typed {v}, pyulog {e}"
-                                ));
-                            }
-                        }
-                        // A column only the struct has must be an absent optional field.
-                        None => assert!(
-                            T::FORMAT
-                                .fields
-                                .iter()
-                                .any(|f| f.optional && col.starts_with(f.name)),
-                            "{name}: {col} is not in the file"
-                        ),
-                    }
-                }
-            }
-        }
-        // The streaming reader, checked when the subscription arrives, decodes the same rows.
-        let file = std::io::BufReader::new(std::fs::File::open(&path).unwrap());
-        let mut reader = StreamReader::new(file).unwrap();
-        let mut decoder: Option<TypedDecoder<T>> = None;
-        let mut streamed = Vec::new();
-        while let Some(event) = reader.next_event().unwrap() {
-            match event {
-                Event::Subscription(s) if s.name == topic && decoder.is_none() => {
-                    decoder = Some(reader.typed::<T>().unwrap());
-                }
-                Event::Row(row) => {
-                    if let Some(v) = decoder.as_ref().and_then(|d| d.decode_row(&row)) {
-                        streamed.push(v);
-                    }
-                }
-                _ => {}
-            }
-        }
-        let all: Vec<T> = typed.rows().map(|(_, v)| v).collect();
-        assert!(
-            encoded(&streamed) == encoded(&all),
-            "{name}: streaming and whole-file rows differ"
-        );
+        let found = check_typed_file(&path, &o, &log, &typed);
+        tally.rows += found.rows;
+        tally.values += found.values;
+        failures.extend(found.failures);
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
     tally

@@ -3,7 +3,7 @@
 /// Status of the ESCs.
 /// One report per ESC.
 ///
-/// `ULog` format `esc_status` (codegen/nested.toml:3):
+/// `ULog` format `esc_status`, from `codegen/nested.toml:3`:
 /// `esc_status:uint64_t timestamp;uint8_t esc_count;esc_report[4] esc;health health;`
 #[derive(::ulog_runtime::ULog, Debug, Clone, PartialEq)]
 #[ulog(name = "esc_status", crate = "::ulog_runtime")]
@@ -24,7 +24,7 @@ pub struct EscStatus {
 
 /// One ESC.
 ///
-/// `ULog` format `esc_report` (codegen/nested.toml:13):
+/// `ULog` format `esc_report`, from `codegen/nested.toml:13`:
 /// `esc_report:int32_t esc_rpm;float esc_voltage;char[6] esc_label;`
 #[derive(::ulog_runtime::ULog, Debug, Clone, PartialEq)]
 #[ulog(name = "esc_report", crate = "::ulog_runtime")]
@@ -39,7 +39,7 @@ pub struct EscReport {
     pub esc_label: ::ulog_runtime::Chars<6>,
 }
 
-/// `ULog` format `health` (format string #1):
+/// `ULog` format `health`, from `format string #1`:
 /// `health:uint8_t level;uint8_t[3] _padding0;float temperature;`
 #[derive(::ulog_runtime::ULog, Debug, Clone, PartialEq)]
 #[ulog(name = "health", crate = "::ulog_runtime")]

@@ -2,7 +2,7 @@
 
 /// The `attitude` format.
 pub(crate) mod attitude {
-    /// `ULog` format `attitude` (format string #1):
+    /// `ULog` format `attitude`, from `format string #1`:
     /// `attitude:uint64_t timestamp;quaternion q;quaternion[2] history;`
     #[derive(::ulog_runtime::ULog, Debug, Clone, PartialEq, Copy, Default)]
     #[ulog(name = "attitude", crate = "::ulog_runtime")]
@@ -18,7 +18,7 @@ pub(crate) mod attitude {
 
 /// The `quaternion` format.
 pub(crate) mod quaternion {
-    /// `ULog` format `quaternion` (format string #2):
+    /// `ULog` format `quaternion`, from `format string #2`:
     /// `quaternion:float w;float x;float y;float z;`
     #[derive(::ulog_runtime::ULog, Debug, Clone, PartialEq, Copy, Default)]
     #[ulog(name = "quaternion", crate = "::ulog_runtime")]

@@ -98,22 +98,15 @@ fn parse<T: syn::parse::Parse>(what: &'static str, value: &str) -> Result<T, Cod
 }
 
 /// Where generated code finds a type of another definition.
-struct Names {
-    types: HashMap<String, String>,
-    modules: HashMap<String, String>,
+pub(crate) struct Names {
+    /// Rust type name by format name.
+    pub(crate) types: HashMap<String, String>,
+    /// Module name (module-per-topic mode) by format name.
+    pub(crate) modules: HashMap<String, String>,
 }
 
-pub(crate) fn render(
-    builder: &Builder,
-    defs: &[Definition],
-    inputs: &[String],
-) -> Result<String, CodegenError> {
-    let krate: syn::Path = parse("runtime crate path", &builder.runtime_crate)?;
-    let vis: syn::Visibility = parse("visibility", &builder.visibility)?;
-    let mut global_derives = Vec::new();
-    for d in &builder.derives {
-        global_derives.push(parse::<syn::Path>("derive", d)?);
-    }
+/// Unique Rust names for the definitions, in order.
+pub(crate) fn names(defs: &[Definition]) -> Names {
     let mut taken_types = HashSet::new();
     let mut taken_modules = HashSet::new();
     let mut names = Names {
@@ -129,6 +122,21 @@ pub(crate) fn render(
             .modules
             .insert(name.clone(), unique(field_name(name), &mut taken_modules));
     }
+    names
+}
+
+pub(crate) fn render(
+    builder: &Builder,
+    defs: &[Definition],
+    inputs: &[String],
+) -> Result<String, CodegenError> {
+    let krate: syn::Path = parse("runtime crate path", &builder.runtime_crate)?;
+    let vis: syn::Visibility = parse("visibility", &builder.visibility)?;
+    let mut global_derives = Vec::new();
+    for d in &builder.derives {
+        global_derives.push(parse::<syn::Path>("derive", d)?);
+    }
+    let names = names(defs);
     let mut items = Vec::new();
     for def in defs {
         let item = one_type(builder, def, &names, &krate, &vis, &global_derives)?;
@@ -177,7 +185,10 @@ fn one_type(
         doc.extend(text.lines().map(str::to_owned));
         doc.push(String::new());
     }
-    doc.push(format!("`ULog` format `{}` ({}):", format.name, def.place));
+    doc.push(format!(
+        "`ULog` format `{}`, from `{}`:",
+        format.name, def.place
+    ));
     doc.push(format!("`{format}`"));
     let name = &format.name;
     let exact = def.exact.then(|| quote!(exact,));

@@ -178,6 +178,18 @@ pub enum CodegenError {
     NoOutDir,
 }
 
+/// A type the generator defines ([`Builder::types`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct GeneratedType {
+    /// The ULog format name.
+    pub format: String,
+    /// The Rust path within the generated file: `EscStatus`, or `esc_status::EscStatus`
+    /// with a module per topic.
+    pub path: String,
+    /// Whether it has a `timestamp` (implements `Topic`).
+    pub topic: bool,
+}
+
 #[derive(Debug, Clone)]
 enum Input {
     Toml(PathBuf),
@@ -276,6 +288,32 @@ impl Builder {
     pub fn render(&self) -> Result<String, CodegenError> {
         let definitions = self.resolve()?;
         emit::render(self, &definitions, &self.input_names())
+    }
+
+    /// The types the generated file defines, in its order.
+    pub fn types(&self) -> Result<Vec<GeneratedType>, CodegenError> {
+        let definitions = self.resolve()?;
+        let names = emit::names(&definitions);
+        Ok(definitions
+            .iter()
+            .map(|d| {
+                let name = &d.format.name;
+                let ty = &names.types[name];
+                GeneratedType {
+                    format: name.clone(),
+                    path: if self.module_per_topic {
+                        format!("{}::{ty}", names.modules[name])
+                    } else {
+                        ty.clone()
+                    },
+                    topic: d.format.fields.iter().any(|f| {
+                        f.name == "timestamp"
+                            && f.array_len.is_none()
+                            && matches!(f.ty, crate::schema::TypeRef::Primitive(p) if p.is_unsigned_integer())
+                    }),
+                }
+            })
+            .collect())
     }
 
     /// Writes the generated file: a relative `file` goes into `OUT_DIR`. The file is rewritten
