@@ -1,132 +1,142 @@
-//! Quickstart: lays out a small ULog file in memory, message by message as the specification
-//! describes them (a nested, padded format included), then reads it back two ways.
+//! Quickstart: write a small flight log from typed topics, then read it back three ways:
+//! typed, dynamic, and streaming. No input file needed.
+//!
+//! The topic types come from two places: `BatteryStatus` (with a nested `BatteryCell`) and
+//! `VehicleAttitude` are generated at build time from `examples/topics.toml` and a format
+//! string (see `examples/build.rs`); `Gps` is a struct with `#[derive(ULog)]`.
 //!
 //! ```text
 //! cargo run -p examples --example quickstart
 //! ```
 
-use ulog_runtime::read::{FileHeader, FlagBits, KeyValue, Message};
-use ulog_runtime::{Event, Log, StreamReader};
+use examples::topics::{BatteryCell, BatteryStatus, VehicleAttitude};
+use ulog_runtime::read::ParamValue;
+use ulog_runtime::{Event, Log, StreamReader, ULog, Value, Writer, WriterOptions};
+
+/// A topic written by hand: the derive makes it a ULog format named `gps`.
+#[derive(ULog, Debug, Clone, PartialEq)]
+struct Gps {
+    timestamp: u64,
+    lat_deg: f64,
+    lon_deg: f64,
+    alt_m: f32,
+    satellites: u8,
+}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let bytes = build_log()?;
-    println!("built a {}-byte log in memory\n", bytes.len());
+    // 1. Write: formats (nested ones included) come from the types.
+    let mut w = Writer::new(Vec::new(), WriterOptions::default())?;
+    w.info("sys_name", &Value::String("quickrover".into()))?;
+    w.parameter("BAT_N_CELLS", ParamValue::Int32(4))?;
+    w.define::<BatteryStatus>()?;
+    w.define::<VehicleAttitude>()?;
+    w.define::<Gps>()?;
+    let battery = w.topic::<BatteryStatus>(0)?;
+    let attitude = w.topic::<VehicleAttitude>(0)?;
+    let gps = w.topic::<Gps>(0)?;
+    for step in 0..5u64 {
+        let t = 1_000_000 + step * 100_000;
+        let cell = BatteryCell {
+            voltage_v: 4.1 - step as f32 * 0.01,
+            temperature: 215,
+            _padding0: [0; 2],
+        };
+        w.write(
+            &battery,
+            &BatteryStatus {
+                timestamp: t,
+                voltage_v: cell.voltage_v * 4.0,
+                current_a: 12.5,
+                remaining: 0.9 - step as f32 * 0.01,
+                cell_count: 4,
+                connected: true,
+                _padding0: [0; 2],
+                cells: [cell; 4],
+            },
+        )?;
+        let yaw = step as f32 * 0.1;
+        w.write(
+            &attitude,
+            &VehicleAttitude {
+                timestamp: t + 10,
+                q: [(yaw / 2.0).cos(), 0.0, 0.0, (yaw / 2.0).sin()],
+                delta_q_reset: [0.0; 3],
+                quat_reset_counter: 0,
+                _padding0: [0; 3],
+            },
+        )?;
+        w.write(
+            &gps,
+            &Gps {
+                timestamp: t + 20,
+                lat_deg: 47.397742 + step as f64 * 1e-5,
+                lon_deg: 8.545594,
+                alt_m: 488.0,
+                satellites: 14,
+            },
+        )?;
+    }
+    w.log(b'6', 1_450_000, "landed")?;
+    let bytes = w.into_inner();
+    println!("wrote a {}-byte log\n", bytes.len());
 
-    // 1. The whole-file view: zero-copy over the bytes (or `Log::open(path)` for a memory map).
+    // 2. Read typed: each type is checked against the file's own format, once.
     let log = Log::from_slice(&bytes)?;
-    let meta = log.metadata();
-    println!(
-        "version {}, started at {} µs",
-        log.header().version,
-        log.header().start_timestamp
-    );
-    for info in meta.info() {
-        println!("info  {} ({}) = {}", info.key, info.type_name, info.value);
-    }
-    for p in meta.initial_parameters() {
-        println!("param {} = {}", p.name, p.value);
-    }
-    for format in meta.schema().formats() {
+    for format in log.metadata().schema().formats() {
         println!("format {format}");
     }
-    for sub in log.subscriptions() {
+    println!();
+    for b in log.topic::<BatteryStatus>()?.instance(0)? {
         println!(
-            "\n{} (multi_id {}, msg_id {}):",
-            sub.name, sub.multi_id, sub.msg_id
+            "battery  t={} {:.2} V, cell 0 {:.2} V at {:.1} °C, {:.0}% left",
+            b.timestamp,
+            b.voltage_v,
+            b.cells[0].voltage_v,
+            f32::from(b.cells[0].temperature) / 10.0,
+            b.remaining * 100.0
         );
-        for row in log.rows(sub) {
-            let value = row.value().ok_or("row does not decode")?;
-            println!("  t={:>7} µs  {value}", row.timestamp);
-        }
-        if let Some(row) = log.rows(sub).next() {
-            let plan = row.plan().ok_or("no plan")?;
-            let names: Vec<String> = plan
-                .columns(row.schema())
-                .into_iter()
-                .map(|c| c.name)
-                .collect();
-            println!("  columns: {}", names.join(", "));
-        }
+    }
+    let last: Gps = log
+        .topic::<Gps>()?
+        .instance(0)?
+        .last()
+        .ok_or("no gps rows")?;
+    println!("last gps fix: {last:?}");
+
+    // 3. Read dynamically: any format, values by name.
+    let sub = log
+        .subscription("vehicle_attitude", 0)
+        .ok_or("no attitude")?;
+    for row in log.rows(sub).take(2) {
+        let q = row.value().ok_or("row does not decode")?;
+        println!(
+            "attitude t={} q={}",
+            row.timestamp,
+            q.field("q").ok_or("no q")?
+        );
     }
     for m in log.logged_messages() {
         println!(
-            "\nlogged [{}] {}",
+            "logged [{}] {}",
             m.level().map_or("?", |l| l.name()),
             m.text
         );
     }
 
-    // 2. Streaming over any `io::Read`, with memory bounded by a few messages.
+    // 4. Stream over any `io::Read`, memory bounded by a few messages, decoding one topic typed.
     let mut reader = StreamReader::new(&bytes[..])?;
-    let mut rows = 0;
+    let mut decoder = None;
+    let mut fixes = 0;
     while let Some(event) = reader.next_event()? {
         match event {
-            Event::Row(_) => rows += 1,
+            Event::Subscription(s) if s.name == "gps" => decoder = Some(reader.typed::<Gps>()?),
+            Event::Row(row) => {
+                fixes += usize::from(decoder.as_ref().and_then(|d| d.decode_row(&row)).is_some());
+            }
             Event::Diagnostic(d) => println!("diagnostic: {d}"),
             _ => {}
         }
     }
-    println!(
-        "streamed {rows} rows; diagnostics: {}",
-        log.diagnostics().len()
-    );
+    println!("streamed {fixes} gps fixes");
     Ok(())
-}
-
-/// A version-1 log: flag bits, two formats (`esc_report` is nested in `esc_status`, with
-/// inner and trailing padding), info, a parameter, a subscription, three rows, a logged string.
-fn build_log() -> Result<Vec<u8>, Box<dyn std::error::Error>> {
-    let mut out = FileHeader {
-        version: 1,
-        start_timestamp: 1_000_000,
-    }
-    .to_bytes()
-    .to_vec();
-    let mut put = |m: Message<'_>| m.encode(&mut out);
-    put(Message::FlagBits(FlagBits::default()))?;
-    // A nested type may be used before it is defined.
-    put(Message::Format(
-        b"esc_status:uint64_t timestamp;uint8_t esc_count;uint8_t[7] _padding0;esc_report[2] esc;",
-    ))?;
-    put(Message::Format(
-        b"esc_report:int32_t esc_rpm;float esc_voltage;uint8_t esc_state;uint8_t[3] _padding0;",
-    ))?;
-    put(Message::Info(KeyValue {
-        key: b"char[8] sys_name",
-        value: b"quickrov",
-    }))?;
-    put(Message::Parameter(KeyValue {
-        key: b"float MPC_XY_VEL_MAX",
-        value: &12.0f32.to_le_bytes(),
-    }))?;
-    put(Message::Subscribe {
-        multi_id: 0,
-        msg_id: 0,
-        name: b"esc_status",
-    })?;
-    for step in 0..3u32 {
-        let mut row = (1_000_000 + u64::from(step) * 10_000)
-            .to_le_bytes()
-            .to_vec();
-        row.push(2); // esc_count
-        row.extend_from_slice(&[0; 7]); // padding
-        for esc in 0..2u32 {
-            let rpm = 1000 * (esc as i32 + 1) + step as i32 * 10;
-            row.extend_from_slice(&rpm.to_le_bytes());
-            row.extend_from_slice(&(15.0f32 + 0.25 * esc as f32).to_le_bytes());
-            row.push(1); // esc_state
-            row.extend_from_slice(&[0; 3]); // padding inside the nested type
-        }
-        put(Message::Data {
-            msg_id: 0,
-            data: &row,
-        })?;
-    }
-    put(Message::Logging {
-        level: b'6',
-        tag: None,
-        timestamp: 1_030_000,
-        text: b"takeoff",
-    })?;
-    Ok(out)
 }

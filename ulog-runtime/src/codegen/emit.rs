@@ -193,11 +193,20 @@ fn one_type(
     let name = &format.name;
     let exact = def.exact.then(|| quote!(exact,));
     let krate_text = quote!(#krate).to_string().replace(' ', "");
+    // Extra derives, each once, and not again the ones every type gets.
     let mut derives: Vec<syn::Path> = Vec::new();
+    let mut seen: Vec<String> = ["Debug", "Clone", "PartialEq"].map(String::from).to_vec();
+    let mut extra = Vec::new();
     for d in &def.derives {
-        derives.push(parse("derive", d)?);
+        extra.push(parse::<syn::Path>("derive", d)?);
     }
-    derives.extend(global_derives.iter().cloned());
+    for path in extra.into_iter().chain(global_derives.iter().cloned()) {
+        let text = quote!(#path).to_string().replace(' ', "");
+        if !seen.contains(&text) {
+            seen.push(text);
+            derives.push(path);
+        }
+    }
 
     let mut taken = HashSet::new();
     let mut fields = Vec::new();
