@@ -1,0 +1,304 @@
+//! `ulog csv` (files as pyulog's `ulog2csv` writes them) and `ulog json`.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use ulog_runtime::Log;
+use ulog_runtime::read::Subscription;
+use ulog_runtime::schema::{FieldKind, FormatId, Primitive, Schema};
+
+use crate::number::{f32_text, f64_text};
+use crate::{Failure, Progress};
+
+pub(crate) struct Options {
+    pub(crate) topics: Vec<String>,
+    pub(crate) output: Option<PathBuf>,
+    pub(crate) delimiter: String,
+    pub(crate) start_us: Option<f64>,
+    pub(crate) end_us: Option<f64>,
+}
+
+/// One CSV column: a number at an offset, or a `char` array as text.
+enum Column {
+    Number {
+        name: String,
+        primitive: Primitive,
+        offset: usize,
+    },
+    Text {
+        name: String,
+        offset: usize,
+        len: usize,
+    },
+}
+
+impl Column {
+    fn name(&self) -> &str {
+        match self {
+            Column::Number { name, .. } | Column::Text { name, .. } => name,
+        }
+    }
+}
+
+/// pyulog's columns: every leaf in format order (`q[0]`, `esc[3].esc_rpm`), top-level
+/// `_padding*` fields left out (padding inside nested types kept, as pyulog keeps it),
+/// `char` arrays as one text column, `timestamp` first.
+fn columns(schema: &Schema, id: FormatId) -> Vec<Column> {
+    let mut out = Vec::new();
+    flatten(schema, id, 0, "", true, &mut out);
+    if let Some(i) = out.iter().position(|c| c.name() == "timestamp") {
+        let ts = out.remove(i);
+        out.insert(0, ts);
+    }
+    out
+}
+
+fn flatten(
+    schema: &Schema,
+    id: FormatId,
+    base: usize,
+    prefix: &str,
+    top: bool,
+    out: &mut Vec<Column>,
+) {
+    let Some(layout) = schema.resolved(id) else {
+        return;
+    };
+    for f in &layout.fields {
+        if top && f.name.starts_with("_padding") {
+            continue;
+        }
+        let start = base + f.offset;
+        match (f.kind, f.array_len) {
+            (FieldKind::Primitive(Primitive::Char), Some(n)) => out.push(Column::Text {
+                name: format!("{prefix}{}", f.name),
+                offset: start,
+                len: usize::from(n),
+            }),
+            (kind, len) => {
+                for i in 0..len.map_or(1, usize::from) {
+                    let name = match len {
+                        Some(_) => format!("{prefix}{}[{i}]", f.name),
+                        None => format!("{prefix}{}", f.name),
+                    };
+                    let offset = start + i * f.elem_size;
+                    match kind {
+                        FieldKind::Primitive(primitive) => out.push(Column::Number {
+                            name,
+                            primitive,
+                            offset,
+                        }),
+                        FieldKind::Nested(nested) => {
+                            flatten(schema, nested, offset, &format!("{name}."), false, out);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// A value as pyulog writes it: integers in decimal, `bool` and `char` as their signed byte,
+/// floats as numpy prints them (parsing gives back the stored value).
+fn write_number(out: &mut String, p: Primitive, b: &[u8]) {
+    use std::fmt::Write as _;
+    let _ = match p {
+        Primitive::Int8 | Primitive::Bool | Primitive::Char => write!(out, "{}", b[0] as i8),
+        Primitive::UInt8 => write!(out, "{}", b[0]),
+        Primitive::Int16 => write!(out, "{}", i16::from_le_bytes([b[0], b[1]])),
+        Primitive::UInt16 => write!(out, "{}", u16::from_le_bytes([b[0], b[1]])),
+        Primitive::Int32 => write!(out, "{}", i32::from_le_bytes(b[..4].try_into().unwrap())),
+        Primitive::UInt32 => write!(out, "{}", u32::from_le_bytes(b[..4].try_into().unwrap())),
+        Primitive::Int64 => write!(out, "{}", i64::from_le_bytes(b[..8].try_into().unwrap())),
+        Primitive::UInt64 => write!(out, "{}", u64::from_le_bytes(b[..8].try_into().unwrap())),
+        Primitive::Float => {
+            out.push_str(&f32_text(f32::from_le_bytes(b[..4].try_into().unwrap())));
+            Ok(())
+        }
+        Primitive::Double => {
+            out.push_str(&f64_text(f64::from_le_bytes(b[..8].try_into().unwrap())));
+            Ok(())
+        }
+    };
+}
+
+/// Text up to the first zero byte, each byte one character (as pyulog's `chr`).
+fn write_text(out: &mut String, bytes: &[u8]) {
+    out.extend(
+        bytes
+            .iter()
+            .take_while(|&&b| b != 0)
+            .map(|&b| char::from(b)),
+    );
+}
+
+/// The subscriptions to export, grouped by (name, multi_id), in file order.
+fn selected<'a>(log: &'a Log<'_>, topics: &[String]) -> Vec<Vec<&'a Subscription>> {
+    let mut groups: Vec<Vec<&Subscription>> = Vec::new();
+    for sub in log.subscriptions() {
+        if sub.format().is_none() || (!topics.is_empty() && !topics.contains(&sub.name)) {
+            continue;
+        }
+        match groups
+            .iter_mut()
+            .find(|g| g[0].name == sub.name && g[0].multi_id == sub.multi_id)
+        {
+            Some(g) => g.push(sub),
+            None => groups.push(vec![sub]),
+        }
+    }
+    groups.retain(|g| g.iter().any(|s| log.rows(s).len() > 0));
+    groups
+}
+
+/// Writes one CSV per topic instance with rows; returns the files and their row counts.
+pub(crate) fn write_all(
+    log: &Log<'_>,
+    file: &Path,
+    options: &Options,
+    progress: &mut Progress,
+) -> Result<Vec<(PathBuf, usize)>, Failure> {
+    let stem = file
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let stem = stem
+        .strip_suffix(".ulg")
+        .or_else(|| stem.strip_suffix(".ULG"))
+        .unwrap_or(&stem)
+        .to_owned();
+    let dir = match &options.output {
+        Some(d) => {
+            std::fs::create_dir_all(d)?;
+            d.clone()
+        }
+        None => file.parent().map(Path::to_owned).unwrap_or_default(),
+    };
+    let schema = log.metadata().schema();
+    let mut written = Vec::new();
+    for group in selected(log, &options.topics) {
+        let sub = group[0];
+        let id = sub.format().expect("selected subscriptions have formats");
+        let cols = columns(schema, id);
+        let path = dir.join(format!(
+            "{stem}_{}_{}.csv",
+            sub.name.replace('/', "_"),
+            sub.multi_id
+        ));
+        let mut out = std::io::BufWriter::new(std::fs::File::create(&path)?);
+        let header: Vec<&str> = cols.iter().map(Column::name).collect();
+        writeln!(out, "{}", header.join(&options.delimiter))?;
+        let mut line = String::new();
+        let mut count = 0;
+        let rows = group.iter().flat_map(|s| log.rows(s));
+        // As ulog2csv: from the first row at or after the start, up to the first row at or
+        // after the end.
+        let mut started = options.start_us.is_none();
+        for row in rows {
+            progress.add(1);
+            let t = row.timestamp as f64;
+            if !started {
+                started = options.start_us.is_some_and(|s| t >= s);
+                if !started {
+                    continue;
+                }
+            }
+            if options.end_us.is_some_and(|e| t >= e) {
+                break;
+            }
+            line.clear();
+            for (k, c) in cols.iter().enumerate() {
+                if k > 0 {
+                    line.push_str(&options.delimiter);
+                }
+                match c {
+                    Column::Number {
+                        primitive, offset, ..
+                    } => {
+                        // Past a row shortened by its trailing padding there is nothing to show.
+                        if let Some(b) = row.data.get(*offset..*offset + primitive.size()) {
+                            write_number(&mut line, *primitive, b);
+                        }
+                    }
+                    Column::Text { offset, len, .. } => {
+                        let end = (*offset + *len).min(row.data.len());
+                        write_text(&mut line, row.data.get(*offset..end).unwrap_or_default());
+                    }
+                }
+            }
+            line.push('\n');
+            out.write_all(line.as_bytes())?;
+            count += 1;
+        }
+        out.flush()?;
+        written.push((path, count));
+    }
+    Ok(written)
+}
+
+/// `ulog json`: JSON Lines (`{"topic", "multi_id", "timestamp", "data"}` per row, file order)
+/// or one document with the metadata and every instance's rows.
+pub(crate) fn json(
+    log: &Log<'_>,
+    topics: &[String],
+    document: bool,
+    out: &mut impl Write,
+) -> Result<(), Failure> {
+    use serde_json::{Map, Value as Json, json};
+    let wanted = |s: &Subscription| topics.is_empty() || topics.contains(&s.name);
+    if !document {
+        for row in log.data() {
+            if !wanted(row.subscription) {
+                continue;
+            }
+            let line = json!({
+                "topic": row.subscription.name,
+                "multi_id": row.subscription.multi_id,
+                "timestamp": row.timestamp,
+                "data": row.value(),
+            });
+            serde_json::to_writer(&mut *out, &line)?;
+            out.write_all(b"\n")?;
+        }
+        return Ok(());
+    }
+    let meta = log.metadata();
+    let mut info = Map::new();
+    for i in meta.info() {
+        info.insert(i.key.clone(), serde_json::to_value(&i.value)?);
+    }
+    let mut params = Map::new();
+    for p in meta.initial_parameters() {
+        params.insert(p.name.clone(), json!(p.value.as_f64()));
+    }
+    let mut instances = Vec::new();
+    for group in selected(log, topics) {
+        let rows: Vec<Json> = group
+            .iter()
+            .flat_map(|s| log.rows(s))
+            .map(|r| json!({"timestamp": r.timestamp, "data": r.value()}))
+            .collect();
+        instances.push(json!({
+            "topic": group[0].name,
+            "multi_id": group[0].multi_id,
+            "format": meta.schema().format(group[0].format().expect("selected")).to_string(),
+            "rows": rows,
+        }));
+    }
+    let doc = json!({
+        "version": log.header().version,
+        "start_timestamp": log.header().start_timestamp,
+        "info": info,
+        "parameters": params,
+        "logged_messages": log.logged_messages().iter().map(|m| json!({
+            "timestamp": m.timestamp,
+            "level": m.level().map(|l| l.name()),
+            "tag": m.tag,
+            "text": m.text,
+        })).collect::<Vec<_>>(),
+        "topics": instances,
+    });
+    serde_json::to_writer_pretty(&mut *out, &doc)?;
+    out.write_all(b"\n")?;
+    Ok(())
+}

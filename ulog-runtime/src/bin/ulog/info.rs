@@ -1,0 +1,250 @@
+//! `ulog info`, `ulog params` and `ulog messages`.
+
+use std::io::Write;
+use std::path::Path;
+
+use ulog_runtime::read::ParamValue;
+use ulog_runtime::{Log, Value};
+
+use crate::Failure;
+use crate::number::{f32_text, f64_text};
+
+/// `h:mm:ss` of a microsecond count, as pyulog prints it.
+fn hms(us: u64) -> String {
+    let s = us / 1_000_000;
+    format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
+}
+
+/// A value for people: text without quotes, numbers as Python prints them.
+fn plain(v: &Value) -> String {
+    match v {
+        Value::String(s) => s.clone(),
+        Value::Scalar(ulog_runtime::Scalar::Float(x)) => f32_text(*x),
+        Value::Scalar(ulog_runtime::Scalar::Double(x)) => f64_text(*x),
+        other => other.to_string(),
+    }
+}
+
+pub(crate) fn info(
+    log: &Log<'_>,
+    file: &Path,
+    verbose: bool,
+    out: &mut impl Write,
+) -> Result<(), Failure> {
+    let meta = log.metadata();
+    let header = log.header();
+    writeln!(
+        out,
+        "File:       {} ({} bytes), ULog version {}",
+        file.display(),
+        log.bytes().len(),
+        header.version
+    )?;
+    let start = header.start_timestamp;
+    let duration = meta.last_timestamp().saturating_sub(start);
+    writeln!(
+        out,
+        "Logging:    start {} ({start} µs), duration {} ({:.3} s)",
+        hms(start),
+        hms(duration),
+        duration as f64 / 1e6
+    )?;
+    match log.flag_bits() {
+        Some(bits) => writeln!(
+            out,
+            "Flag bits:  compat {:#04x} (default parameters: {}), incompat {:#04x} (data appended: {}{})",
+            bits.compat[0],
+            if bits.has_default_parameters() {
+                "yes"
+            } else {
+                "no"
+            },
+            bits.incompat[0],
+            if bits.has_data_appended() {
+                "yes"
+            } else {
+                "no"
+            },
+            bits.appended()
+                .map(|o| format!(", at {o}"))
+                .collect::<String>()
+        )?,
+        None => writeln!(out, "Flag bits:  none (a version-0 file)")?,
+    }
+    let dropouts: Vec<u64> = log
+        .dropouts()
+        .iter()
+        .map(|d| u64::from(d.duration_ms))
+        .collect();
+    if dropouts.is_empty() {
+        writeln!(out, "Dropouts:   none")?;
+    } else {
+        let total: u64 = dropouts.iter().sum();
+        writeln!(
+            out,
+            "Dropouts:   count: {}, total duration: {:.1} s, max: {} ms, mean: {} ms",
+            dropouts.len(),
+            total as f64 / 1000.0,
+            dropouts.iter().max().unwrap_or(&0),
+            total / dropouts.len() as u64
+        )?;
+    }
+    let skipped: u64 = log.corrupt_ranges().map(|r| r.end - r.start).sum();
+    if log.diagnostics().is_empty() {
+        writeln!(out, "Damage:     none")?;
+    } else {
+        writeln!(
+            out,
+            "Damage:     {} problems, {skipped} bytes skipped{}",
+            log.diagnostics().len(),
+            if verbose { ":" } else { " (-v lists them)" }
+        )?;
+        if verbose {
+            for d in log.diagnostics() {
+                writeln!(out, "  {d}")?;
+            }
+        }
+    }
+    writeln!(out, "Info:")?;
+    let mut info: Vec<_> = meta.info().iter().collect();
+    info.sort_by(|a, b| a.key.cmp(&b.key));
+    let width = info.iter().map(|i| i.key.len()).max().unwrap_or(0);
+    for i in info
+        .iter()
+        .filter(|i| verbose || !i.key.starts_with("perf_"))
+    {
+        writeln!(out, "  {:<width$}  {}", i.key, plain(&i.value))?;
+    }
+    if !meta.multi_info().is_empty() {
+        writeln!(out, "Multi info:")?;
+        for m in meta.multi_info() {
+            if verbose {
+                for (k, parts) in m.values.iter().enumerate() {
+                    let text: String = parts.iter().map(plain).collect();
+                    writeln!(out, "  {} {k}: {text}", m.key)?;
+                }
+            } else {
+                writeln!(out, "  {}: {} values", m.key, m.values.len())?;
+            }
+        }
+    }
+    writeln!(out)?;
+    writeln!(
+        out,
+        " {:<40} {:>5} {:>6} {:>9} {:>11} {:>6} {:>9} {:>10}",
+        "topic", "multi", "size", "rows", "bytes", "msg_id", "rate Hz", "duration s"
+    )?;
+    let mut subs: Vec<_> = log.subscriptions().iter().collect();
+    subs.sort_by(|a, b| (&a.name, a.multi_id, a.msg_id).cmp(&(&b.name, b.multi_id, b.msg_id)));
+    for sub in subs {
+        let rows = log.rows(sub);
+        let n = rows.len();
+        if n == 0 && !verbose {
+            continue;
+        }
+        let size = sub.payload_sizes().map_or(0, |(min, _)| min);
+        let (first, last) = (
+            log.rows(sub).next().map_or(0, |r| r.timestamp),
+            log.rows(sub).next_back().map_or(0, |r| r.timestamp),
+        );
+        let span = last.saturating_sub(first) as f64 / 1e6;
+        let rate = if span > 0.0 {
+            (n - 1) as f64 / span
+        } else {
+            0.0
+        };
+        writeln!(
+            out,
+            " {:<40} {:>5} {:>6} {:>9} {:>11} {:>6} {:>9.1} {:>10.1}",
+            sub.name,
+            sub.multi_id,
+            size,
+            n,
+            size * n,
+            sub.msg_id,
+            rate,
+            span
+        )?;
+    }
+    Ok(())
+}
+
+fn param_text(v: ParamValue) -> String {
+    match v {
+        ParamValue::Int32(i) => i.to_string(),
+        // pyulog holds the float32 as a Python float and prints its repr.
+        ParamValue::Float(f) => f64_text(f64::from(f)),
+    }
+}
+
+/// As pyulog's `ulog_params` (csv format): `NAME<d>initial<d>change...`, sorted by name.
+pub(crate) fn params(
+    log: &Log<'_>,
+    initial: bool,
+    timestamps: bool,
+    delimiter: &str,
+    default: Option<&str>,
+    out: &mut impl Write,
+) -> Result<(), Failure> {
+    let meta = log.metadata();
+    let mut params: Vec<(String, ParamValue)> = match default {
+        None => meta
+            .initial_parameters()
+            .iter()
+            .map(|p| (p.name.clone(), p.value))
+            .collect(),
+        Some(kind) => {
+            let bit = if kind == "system" { 1 } else { 2 };
+            let mut defaults: Vec<(String, ParamValue)> = Vec::new();
+            for d in meta.default_parameters() {
+                if d.default_types & bit != 0 {
+                    // A later default replaces an earlier one, as in pyulog's dictionary.
+                    defaults.retain(|(n, _)| *n != d.name);
+                    defaults.push((d.name.clone(), d.value));
+                }
+            }
+            defaults
+        }
+    };
+    params.sort_by(|a, b| a.0.cmp(&b.0));
+    for (name, value) in params {
+        let changes: Vec<_> = log
+            .parameter_changes()
+            .iter()
+            .filter(|c| c.name == name)
+            .collect();
+        write!(out, "{name}{delimiter}{}", param_text(value))?;
+        if timestamps {
+            for c in &changes {
+                write!(out, "{delimiter}{}", param_text(c.value))?;
+            }
+            write!(out, "\ntimestamp{delimiter}0")?;
+            for c in &changes {
+                write!(out, "{delimiter}{}", c.timestamp)?;
+            }
+        } else if !initial {
+            for c in &changes {
+                write!(out, "{delimiter}{}", param_text(c.value))?;
+            }
+        }
+        writeln!(out)?;
+    }
+    Ok(())
+}
+
+/// As pyulog's `ulog_messages`: `h:mm:ss.mmm LEVEL: text`; tagged strings add `[tag N]`.
+pub(crate) fn messages(log: &Log<'_>, out: &mut impl Write) -> Result<(), Failure> {
+    for m in log.logged_messages() {
+        let ms = m.timestamp / 1000;
+        let level = m.level().map_or("UNKNOWN", |l| l.name());
+        let tag = m.tag.map(|t| format!("[tag {t}] ")).unwrap_or_default();
+        writeln!(
+            out,
+            "{}.{:03} {level}: {tag}{}",
+            hms(ms * 1000),
+            ms % 1000,
+            m.text
+        )?;
+    }
+    Ok(())
+}

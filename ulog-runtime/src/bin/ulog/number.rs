@@ -1,0 +1,137 @@
+//! Numbers as Python (and numpy) print them, so `ulog` output reads like pyulog's and parses
+//! back to the exact stored value.
+
+/// `x` as Python's `repr(float)`: shortest digits that round-trip (a tie to the even digit),
+/// positional for `1e-4 <= |x| < 1e16`, else `1.5e-05` / `1e+16`.
+pub(crate) fn f64_text(x: f64) -> String {
+    special(x).unwrap_or_else(|| {
+        let sci = tie_to_even(format!("{x:e}"), |t| t.parse::<f64>().ok() == Some(x), x);
+        python_style(&sci, (1e-4..1e16).contains(&x.abs()))
+    })
+}
+
+/// `x` as numpy prints a `float32`: the shortest digits that round-trip as `f32` (a tie to
+/// the even digit), positional for `1e-4 <= |x| < 1e6`, else `4.2949675e+06`.
+pub(crate) fn f32_text(x: f32) -> String {
+    let wide = f64::from(x);
+    special(wide).unwrap_or_else(|| {
+        let sci = tie_to_even(format!("{x:e}"), |t| t.parse::<f32>().ok() == Some(x), wide);
+        python_style(&sci, (1e-4..1e6).contains(&wide.abs()))
+    })
+}
+
+/// When the exact value lies halfway between two shortest texts, Rust picks the upper one and
+/// Python and numpy the one with an even last digit: pick that one.
+fn tie_to_even(sci: String, round_trips: impl Fn(&str) -> bool, exact: f64) -> String {
+    let (mantissa, exp) = sci.split_once('e').expect("`{:e}` has an exponent");
+    let last = mantissa.as_bytes()[mantissa.len() - 1];
+    if !mantissa.contains('.') || last % 2 == 0 || last == b'0' {
+        return sci;
+    }
+    let lower = format!(
+        "{}{}e{exp}",
+        &mantissa[..mantissa.len() - 1],
+        char::from(last - 1)
+    );
+    // Halfway: the exact value, written out, is the lower text followed by a 5 and zeros.
+    let digits = mantissa.len() - mantissa.starts_with('-') as usize - 1;
+    let exact_text = format!("{:.*e}", digits + 40, exact);
+    let (exact_mantissa, _) = exact_text.split_once('e').expect("an exponent");
+    let halfway = exact_mantissa.len() > mantissa.len()
+        && exact_mantissa.starts_with(&lower[..mantissa.len()])
+        && exact_mantissa[mantissa.len()..].trim_end_matches('0') == "5";
+    if halfway && round_trips(&lower) {
+        lower
+    } else {
+        sci
+    }
+}
+
+fn special(x: f64) -> Option<String> {
+    if x.is_nan() {
+        Some("nan".into())
+    } else if x.is_infinite() {
+        Some(if x > 0.0 { "inf" } else { "-inf" }.into())
+    } else if x == 0.0 {
+        Some(if x.is_sign_negative() { "-0.0" } else { "0.0" }.into())
+    } else {
+        None
+    }
+}
+
+/// Rewrites Rust's shortest `{:e}` form (`-1.5e-5`) in Python's style, positional or
+/// scientific.
+fn python_style(sci: &str, positional: bool) -> String {
+    let (sign, rest) = match sci.strip_prefix('-') {
+        Some(r) => ("-", r),
+        None => ("", sci),
+    };
+    let (mantissa, exp) = rest.split_once('e').expect("`{:e}` has an exponent");
+    let exp: i32 = exp.parse().expect("an integer exponent");
+    let digits: String = mantissa.chars().filter(char::is_ascii_digit).collect();
+    if positional {
+        let body = if exp >= 0 {
+            let int_len = (exp + 1) as usize;
+            if digits.len() <= int_len {
+                format!("{digits}{}.0", "0".repeat(int_len - digits.len()))
+            } else {
+                format!("{}.{}", &digits[..int_len], &digits[int_len..])
+            }
+        } else {
+            format!("0.{}{digits}", "0".repeat((-exp - 1) as usize))
+        };
+        format!("{sign}{body}")
+    } else {
+        let mantissa = if digits.len() == 1 {
+            digits
+        } else {
+            format!("{}.{}", &digits[..1], &digits[1..])
+        };
+        let exp_sign = if exp < 0 { '-' } else { '+' };
+        format!("{sign}{mantissa}e{exp_sign}{:02}", exp.abs())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn like_python_and_numpy() {
+        // Expected texts are Python's repr / numpy's str of the same values.
+        for (x, text) in [
+            (0.05000000074505806, "0.05000000074505806"),
+            (-1.0, "-1.0"),
+            (1e20, "1e+20"),
+            (1.5e-5, "1.5e-05"),
+            (123456.0, "123456.0"),
+            (0.0001, "0.0001"),
+            (1e16, "1e+16"),
+            (9999999999999998.0, "9999999999999998.0"),
+        ] {
+            assert_eq!(f64_text(x), text);
+        }
+        for (x, text) in [
+            (0.1f32, "0.1"),
+            (16.2, "16.2"),
+            (1e-5, "1e-05"),
+            (3.4028235e38, "3.4028235e+38"),
+        ] {
+            assert_eq!(f32_text(x), text);
+        }
+        assert_eq!(f32_text(-0.0), "-0.0");
+        assert_eq!(f32_text(f32::NAN), "nan");
+        assert_eq!(f64_text(f64::NEG_INFINITY), "-inf");
+    }
+
+    #[test]
+    fn texts_parse_back_exactly() {
+        let mut x = 1.234_567_9e-7_f32;
+        for _ in 0..200 {
+            assert_eq!(f32_text(x).parse::<f32>().unwrap().to_bits(), x.to_bits());
+            let y = f64::from(x) * 1.000_000_1;
+            assert_eq!(f64_text(y).parse::<f64>().unwrap().to_bits(), y.to_bits());
+            x *= -3.7;
+        }
+    }
+}

@@ -1,0 +1,495 @@
+//! The `ulog` binary against pyulog: `ulog csv` equals `ulog2csv` value by value on every
+//! corpus file, `ulog params`/`info`/`messages` carry the facts of pyulog's committed
+//! `*_params.txt`, `*_info.txt` and `*_messages.txt`, snapshots of the human-readable output,
+//! and one-line errors.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+#[path = "../../tests/src/corpus.rs"]
+#[allow(dead_code, unreachable_pub)]
+mod corpus;
+
+use corpus::{corpus_dir, corpus_files, pyulog_blind_ranges, short_name, under_ci};
+
+fn ulog(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_ulog"))
+        .args(args)
+        .output()
+        .expect("the ulog binary runs")
+}
+
+fn stdout(args: &[&str]) -> String {
+    let out = ulog(args);
+    assert!(
+        out.status.success(),
+        "ulog {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("ulog-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Runs pyulog's `ulog2csv` if pyulog is installed (required under CI).
+fn ulog2csv(file: &Path, dir: &Path) -> bool {
+    let ok = Command::new("python3")
+        .args([
+            "-c",
+            "import sys; from pyulog.ulog2csv import main; sys.argv[0] = 'ulog2csv'; main()",
+        ])
+        .arg(file)
+        .arg("-o")
+        .arg(dir)
+        .output()
+        .is_ok_and(|o| o.status.success());
+    assert!(
+        ok || !under_ci(),
+        "under CI pyulog must be installed (.ci/run does it)"
+    );
+    ok
+}
+
+fn csv_files(dir: &Path) -> BTreeMap<String, String> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| {
+            let path = e.unwrap().path();
+            let name = path.file_name().unwrap().to_string_lossy().into_owned();
+            (name, std::fs::read_to_string(&path).unwrap())
+        })
+        .collect()
+}
+
+/// Two cells are the same value: equal numbers (NaN equal to NaN; `float` columns compared
+/// as `f32`, whose shortest texts may differ in a last tied digit), or equal text.
+fn same_cell(a: &str, b: &str, float32: bool) -> bool {
+    if float32 && let (Ok(x), Ok(y)) = (a.parse::<f32>(), b.parse::<f32>()) {
+        return x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan());
+    }
+    match (a.parse::<f64>(), b.parse::<f64>()) {
+        (Ok(x), Ok(y)) => x == y || (x.is_nan() && y.is_nan()),
+        _ => a == b,
+    }
+}
+
+#[test]
+fn csv_equals_ulog2csv_on_every_corpus_file() {
+    let (mut files, mut identical, mut cells, mut compared) = (0, 0, 0usize, 0);
+    for path in corpus_files() {
+        let name = short_name(&path);
+        let ours = temp_dir("ours");
+        let theirs = temp_dir("theirs");
+        stdout(&["csv", path.to_str().unwrap(), "-o", ours.to_str().unwrap()]);
+        if !ulog2csv(&path, &theirs) {
+            eprintln!("pyulog not installed: nothing to compare ulog csv with");
+            return;
+        }
+        let (ours_files, theirs_files) = (csv_files(&ours), csv_files(&theirs));
+        assert_eq!(
+            ours_files.keys().collect::<Vec<_>>(),
+            theirs_files.keys().collect::<Vec<_>>(),
+            "{name}: the CSV files"
+        );
+        // Rows pyulog cannot see (it resumes after damage only at a sync magic) are set aside.
+        let log = ulog_runtime::Log::open(&path).unwrap();
+        let blind = pyulog_blind_ranges(&log);
+        let stem = path.file_stem().unwrap().to_string_lossy();
+        for (file, text) in &ours_files {
+            files += 1;
+            let expected = &theirs_files[file];
+            if text == expected {
+                identical += 1;
+            }
+            let sub = log
+                .subscriptions()
+                .iter()
+                .find(|s| {
+                    *file == format!("{stem}_{}_{}.csv", s.name.replace('/', "_"), s.multi_id)
+                        && log.rows(s).len() > 0
+                })
+                .unwrap();
+            let hidden: Vec<bool> = log
+                .subscriptions()
+                .iter()
+                .filter(|s| s.name == sub.name && s.multi_id == sub.multi_id)
+                .flat_map(|s| log.rows(s))
+                .map(|r| blind.iter().any(|b| b.contains(&r.offset)))
+                .collect();
+            let mut lines = text.lines();
+            let header = lines.next().unwrap();
+            let rows: Vec<&str> = lines
+                .zip(&hidden)
+                .filter(|(_, h)| !**h)
+                .map(|(l, _)| l)
+                .collect();
+            let mut expected_lines = expected.lines();
+            assert_eq!(
+                header,
+                expected_lines.next().unwrap(),
+                "{name} {file}: header"
+            );
+            let schema = log.metadata().schema();
+            let float_columns: Vec<String> = sub
+                .plan(schema)
+                .unwrap()
+                .columns(schema)
+                .into_iter()
+                .filter(|c| c.primitive == ulog_runtime::schema::Primitive::Float)
+                .map(|c| c.name)
+                .collect();
+            let float32: Vec<bool> = header
+                .split(',')
+                .map(|h| float_columns.iter().any(|c| c == h))
+                .collect();
+            let expected_rows: Vec<&str> = expected_lines.collect();
+            assert_eq!(rows.len(), expected_rows.len(), "{name} {file}: rows");
+            for (i, (a, b)) in rows.iter().zip(&expected_rows).enumerate() {
+                let (a, b): (Vec<&str>, Vec<&str>) =
+                    (a.split(',').collect(), b.split(',').collect());
+                assert_eq!(a.len(), b.len(), "{name} {file} row {i}: cells");
+                for (k, (x, y)) in a.iter().zip(&b).enumerate() {
+                    cells += 1;
+                    assert!(
+                        same_cell(x, y, float32[k]),
+                        "{name} {file} row {i} column {k}: ours {x:?}, ulog2csv {y:?}"
+                    );
+                }
+            }
+        }
+        compared += 1;
+        std::fs::remove_dir_all(&ours).unwrap();
+        std::fs::remove_dir_all(&theirs).unwrap();
+    }
+    eprintln!(
+        "{compared} logs, {files} CSV files, {cells} cells equal to ulog2csv's; \
+         {identical} files byte for byte"
+    );
+}
+
+#[test]
+fn csv_options_select_topics_time_and_delimiter() {
+    let path = corpus_dir().join("pyulog/sample_log_small.ulg");
+    if !path.exists() {
+        assert!(!under_ci(), "corpus missing");
+        return;
+    }
+    let dir = temp_dir("options");
+    let log = ulog_runtime::Log::open(&path).unwrap();
+    let first = log
+        .rows(log.subscription("vehicle_attitude", 0).unwrap())
+        .next()
+        .unwrap()
+        .timestamp;
+    let start = (first / 1_000_000 + 2) as f64;
+    let (start_text, end_text) = (start.to_string(), (start + 1.5).to_string());
+    let listed = stdout(&[
+        "csv",
+        path.to_str().unwrap(),
+        "-o",
+        dir.to_str().unwrap(),
+        "-m",
+        "vehicle_attitude,sensor_combined",
+        "-d",
+        ";",
+        "--start",
+        &start_text,
+        "--end",
+        &end_text,
+    ]);
+    let files = csv_files(&dir);
+    assert_eq!(
+        files.keys().collect::<Vec<_>>(),
+        [
+            "sample_log_small_sensor_combined_0.csv",
+            "sample_log_small_vehicle_attitude_0.csv"
+        ]
+    );
+    assert_eq!(listed.lines().count(), 2);
+    for text in files.values() {
+        let mut lines = text.lines();
+        assert!(lines.next().unwrap().starts_with("timestamp;"));
+        let stamps: Vec<u64> = lines
+            .map(|l| l.split(';').next().unwrap().parse().unwrap())
+            .collect();
+        assert!(!stamps.is_empty());
+        let window = (start * 1e6) as u64..((start + 1.5) * 1e6) as u64;
+        assert!(stamps.iter().all(|t| window.contains(t)), "{stamps:?}");
+        // ulog2csv's rule: from the first row at or after the start.
+        assert!(stamps[0] - window.start < 200_000, "{stamps:?}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn params_equal_ulog_params_output() {
+    let dir = corpus_dir().join("pyulog");
+    let expected = dir.join("sample_params.txt");
+    if !expected.exists() {
+        assert!(!under_ci(), "corpus missing");
+        return;
+    }
+    let ours = stdout(&["params", dir.join("sample.ulg").to_str().unwrap()]);
+    assert_eq!(ours, std::fs::read_to_string(expected).unwrap());
+}
+
+/// The facts of a pyulog `*_info.txt`: start, duration, dropouts, info values, and per topic
+/// instance the message size, row count and bytes.
+#[test]
+fn info_carries_the_facts_of_ulog_info() {
+    let dir = corpus_dir().join("pyulog");
+    let mut checked = 0;
+    for stem in ["sample", "sample_appended_multiple"] {
+        let Ok(expected) = std::fs::read_to_string(dir.join(format!("{stem}_info.txt"))) else {
+            assert!(!under_ci(), "corpus missing");
+            continue;
+        };
+        // pyulog shows perf_* info only with -v.
+        let verbose = if expected.contains(" perf_") {
+            "-v"
+        } else {
+            "--"
+        };
+        let ours = stdout(&[
+            "info",
+            verbose,
+            dir.join(format!("{stem}.ulg")).to_str().unwrap(),
+        ]);
+        let mut lines = expected.lines();
+        let first = lines.next().unwrap(); // Logging start time: 0:01:52, duration: 0:01:08
+        let (start, duration) = first
+            .strip_prefix("Logging start time: ")
+            .unwrap()
+            .split_once(", duration: ")
+            .unwrap();
+        assert!(
+            ours.contains(&format!("start {start} ("))
+                && ours.contains(&format!("duration {duration} (")),
+            "{stem}: {first}\n{ours}"
+        );
+        let mut section = "";
+        for line in lines {
+            if !line.starts_with(' ') {
+                section = line;
+            }
+            if let Some(d) = line.strip_prefix("Dropouts: ") {
+                assert!(ours.contains(&format!("Dropouts:   {d}")), "{stem}: {line}");
+            } else if line == "No Dropouts" {
+                assert!(ours.contains("Dropouts:   none"));
+            } else if section == "Info Messages:" && line.starts_with(' ') {
+                // An info value: ` key: value`.
+                let (key, value) = line[1..].split_once(": ").unwrap();
+                assert!(
+                    ours.lines().any(|l| {
+                        let mut w = l.split_whitespace();
+                        w.next() == Some(key)
+                            && w.collect::<Vec<_>>() == value.split_whitespace().collect::<Vec<_>>()
+                    }),
+                    "{stem}: info {key}"
+                );
+                checked += 1;
+            } else if section == "Info Multiple Messages:" && line.starts_with(' ') {
+                // ` key: [[part, ...], ...]`: ours lists each value as `  key N: text`.
+                let (key, _) = line[1..].split_once(": ").unwrap();
+                assert!(
+                    ours.contains(&format!("  {key} 0: ")),
+                    "{stem}: multi info {key}"
+                );
+                checked += 1;
+            } else if section.starts_with("Name (") && line.starts_with(' ') {
+                // ` name (multi, size)   rows   bytes`
+                let (name, rest) = line[1..].split_once(" (").unwrap();
+                let (ids, counts) = rest.split_once(')').unwrap();
+                let (multi, size) = ids.split_once(", ").unwrap();
+                let counts: Vec<&str> = counts.split_whitespace().collect();
+                let want = [name, multi, size, counts[0], counts[1]];
+                assert!(
+                    ours.lines()
+                        .any(|l| l.split_whitespace().take(5).eq(want.iter().copied())),
+                    "{stem}: no topic line {want:?} in\n{ours}"
+                );
+                checked += 1;
+            }
+        }
+    }
+    if !corpus_files().is_empty() {
+        assert!(checked > 20, "{checked}");
+    }
+}
+
+#[test]
+fn messages_equal_ulog_messages_output() {
+    let dir = corpus_dir().join("pyulog");
+    for stem in ["sample", "sample_appended_multiple"] {
+        let Ok(expected) = std::fs::read_to_string(dir.join(format!("{stem}_messages.txt"))) else {
+            assert!(!under_ci(), "corpus missing");
+            continue;
+        };
+        let ours = stdout(&[
+            "messages",
+            dir.join(format!("{stem}.ulg")).to_str().unwrap(),
+        ]);
+        // The committed files come from a pyulog that printed whole seconds.
+        let ours: Vec<String> = ours
+            .lines()
+            .map(|l| {
+                let (time, rest) = l.split_once(' ').unwrap();
+                format!("{} {rest}", time.split('.').next().unwrap())
+            })
+            .collect();
+        assert_eq!(ours, expected.lines().collect::<Vec<_>>(), "{stem}");
+    }
+}
+
+/// A small log written here, so the snapshot does not depend on the corpus.
+fn snapshot_log(dir: &Path) -> PathBuf {
+    use ulog_runtime::read::ParamValue;
+    use ulog_runtime::{Value, Writer, WriterOptions};
+    let path = dir.join("snapshot.ulg");
+    let mut w = Writer::create(
+        &path,
+        WriterOptions {
+            start_timestamp: 3_723_000_000,
+            default_parameters: true,
+        },
+    )
+    .unwrap();
+    w.format("esc_report:int32_t esc_rpm;float esc_voltage;uint8_t[4] _padding0;")
+        .unwrap();
+    w.format("esc_status:uint64_t timestamp;uint8_t esc_count;uint8_t[7] _padding0;esc_report[2] esc;char[4] name;")
+        .unwrap();
+    w.info("sys_name", &Value::String("snap".into())).unwrap();
+    w.info("perf_top", &Value::String("hidden unless -v".into()))
+        .unwrap();
+    w.multi_info("boot", &Value::String("a".into()), false)
+        .unwrap();
+    w.parameter("MC_ROLL_P", ParamValue::Float(6.5)).unwrap();
+    w.parameter("SYS_AUTOSTART", ParamValue::Int32(4001))
+        .unwrap();
+    w.default_parameter("MC_ROLL_P", ParamValue::Float(7.0), 1)
+        .unwrap();
+    let esc = [
+        w.subscribe("esc_status", 0).unwrap(),
+        w.subscribe("esc_status", 1).unwrap(),
+    ];
+    for i in 0..11u64 {
+        for (k, id) in esc.iter().enumerate() {
+            let mut row = (3_723_000_000 + i * 100_000 + k as u64)
+                .to_le_bytes()
+                .to_vec();
+            row.extend_from_slice(&[2, 0, 0, 0, 0, 0, 0, 0]);
+            for e in 0..2i32 {
+                row.extend_from_slice(&(1000 * e + i as i32).to_le_bytes());
+                row.extend_from_slice(&(0.1f32 * i as f32).to_le_bytes());
+                row.extend_from_slice(&[0; 4]);
+            }
+            row.extend_from_slice(b"ab\0\0");
+            w.data(*id, &row).unwrap();
+        }
+        if i == 5 {
+            w.log(b'4', 3_723_500_000, "low battery").unwrap();
+            w.log_tagged(b'6', 2, 3_723_500_123, "tagged").unwrap();
+            w.parameter("MC_ROLL_P", ParamValue::Float(6.75)).unwrap();
+            w.dropout(25).unwrap();
+        }
+    }
+    w.flush().unwrap();
+    path
+}
+
+#[test]
+fn human_output_snapshots() {
+    let dir = temp_dir("snapshot");
+    let log = snapshot_log(&dir);
+    let log = log.to_str().unwrap();
+    let snapshots = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/snapshots");
+    let refresh = std::env::var_os("ULOG_REFRESH").is_some();
+    let mut stale = Vec::new();
+    for (name, args) in [
+        ("info.txt", vec!["info", log]),
+        ("info_verbose.txt", vec!["info", "-v", log]),
+        ("params.txt", vec!["params", log]),
+        ("params_timestamps.txt", vec!["params", "-t", log]),
+        ("params_defaults.txt", vec!["params", "-d", "system", log]),
+        ("messages.txt", vec!["messages", log]),
+    ] {
+        // The file's path differs per run.
+        let got = stdout(&args).replace(log, "snapshot.ulg");
+        let path = snapshots.join(name);
+        if refresh {
+            std::fs::create_dir_all(&snapshots).unwrap();
+            std::fs::write(&path, &got).unwrap();
+        }
+        if std::fs::read_to_string(&path).unwrap_or_default() != got {
+            stale.push(format!("{name}:\n{got}"));
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(
+        stale.is_empty(),
+        "output changed (ULOG_REFRESH=1 to accept):\n{}",
+        stale.join("\n")
+    );
+}
+
+#[test]
+fn json_and_codegen() {
+    let dir = temp_dir("json");
+    let path = snapshot_log(&dir);
+    let file = path.to_str().unwrap();
+    let lines = stdout(&["json", file]);
+    let rows: Vec<serde_json::Value> = lines
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(rows.len(), 22);
+    assert_eq!(rows[1]["multi_id"], 1);
+    assert_eq!(rows[2]["data"]["esc"][1]["esc_rpm"], 1001);
+    assert_eq!(rows[2]["data"]["name"], "ab");
+    let doc: serde_json::Value =
+        serde_json::from_str(&stdout(&["json", "--document", "-m", "esc_status", file])).unwrap();
+    assert_eq!(doc["topics"].as_array().unwrap().len(), 2);
+    assert_eq!(doc["topics"][0]["rows"].as_array().unwrap().len(), 11);
+    assert_eq!(doc["info"]["sys_name"], "snap");
+    let code = stdout(&["codegen", file, "-m", "esc_status"]);
+    let expected = ulog_runtime::codegen::Builder::new()
+        .ulog_topics(&path, &["esc_status"])
+        .render()
+        .unwrap();
+    assert_eq!(code, expected);
+    assert!(code.contains("pub struct EscStatus"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn errors_are_one_line_with_the_file_and_offset() {
+    let dir = temp_dir("errors");
+    let missing = dir.join("missing.ulg");
+    let out = ulog(&["info", missing.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.starts_with(&format!("ulog: {}: ", missing.display())),
+        "{err}"
+    );
+    let garbage = dir.join("garbage.ulg");
+    std::fs::write(&garbage, b"not a ulog file at all").unwrap();
+    let out = ulog(&["csv", garbage.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("garbage.ulg") && !err.contains("panicked"),
+        "{err}"
+    );
+    let out = ulog(&["params", "--default", "nonsense", garbage.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2), "usage errors exit with 2");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
