@@ -417,6 +417,7 @@ fn human_output_snapshots() {
         ("params.txt", vec!["params", log]),
         ("params_timestamps.txt", vec!["params", "-t", log]),
         ("params_defaults.txt", vec!["params", "-d", "system", log]),
+        ("params_changed.txt", vec!["params", "--changed", log]),
         ("messages.txt", vec!["messages", log]),
     ] {
         // The file's path differs per run.

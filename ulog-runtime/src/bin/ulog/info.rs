@@ -95,8 +95,13 @@ pub(crate) fn info(
     } else {
         writeln!(
             out,
-            "Damage:     {} problems, {skipped} bytes skipped{}",
+            "Damage:     {} problem{}, {skipped} bytes skipped{}",
             log.diagnostics().len(),
+            if log.diagnostics().len() == 1 {
+                ""
+            } else {
+                "s"
+            },
             if verbose { ":" } else { " (-v lists them)" }
         )?;
         if verbose {
@@ -178,9 +183,11 @@ fn param_text(v: ParamValue) -> String {
 }
 
 /// As pyulog's `ulog_params` (csv format): `NAME<d>initial<d>change...`, sorted by name.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn params(
     log: &Log<'_>,
     initial: bool,
+    changed: bool,
     timestamps: bool,
     delimiter: &str,
     default: Option<&str>,
@@ -213,6 +220,9 @@ pub(crate) fn params(
             .iter()
             .filter(|c| c.name == name)
             .collect();
+        if changed && changes.is_empty() {
+            continue;
+        }
         write!(out, "{name}{delimiter}{}", param_text(value))?;
         if timestamps {
             for c in &changes {

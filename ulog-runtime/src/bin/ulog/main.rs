@@ -37,6 +37,9 @@ enum Command {
         /// Only the initial values (no changes).
         #[arg(short, long)]
         initial: bool,
+        /// Only the parameters that changed during the log.
+        #[arg(short, long)]
+        changed: bool,
         /// After each parameter, a line with the change timestamps.
         #[arg(short, long)]
         timestamps: bool,
@@ -136,12 +139,14 @@ fn run(command: Command, out: &mut impl Write) -> Result<(), Failure> {
         Command::Params {
             file,
             initial,
+            changed,
             timestamps,
             delimiter,
             default,
         } => info::params(
             &open(&file)?,
             initial,
+            changed,
             timestamps,
             &delimiter,
             default.as_deref(),
