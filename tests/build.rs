@@ -3,21 +3,11 @@
 //! on them: log -> types -> typed decode, compared with pyulog's oracle.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-fn collect(dir: &Path, out: &mut Vec<PathBuf>) {
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return;
-    };
-    for entry in entries.flatten() {
-        let path = entry.path();
-        if path.is_dir() {
-            collect(&path, out);
-        } else if path.extension().is_some_and(|e| e == "ulg") {
-            out.push(path);
-        }
-    }
-}
+#[path = "src/files.rs"]
+#[allow(unreachable_pub)]
+mod files;
 
 fn main() {
     println!("cargo:rerun-if-env-changed=ULOG_CORPUS");
@@ -33,9 +23,7 @@ fn main() {
     };
     println!("cargo:rerun-if-changed={}", corpus.display());
     let out = PathBuf::from(std::env::var_os("OUT_DIR").unwrap());
-    let mut files = Vec::new();
-    collect(&corpus, &mut files);
-    files.sort();
+    let files = files::ulg_files(&corpus);
     let mut modules = String::new();
     let mut checks = String::from("/// (log file name, topic, check) for every topic type.\n");
     checks.push_str("pub static CHECKS: &[(&str, &str, Checker)] = &[\n");

@@ -1,6 +1,6 @@
 //! Finding the corpus, its oracles, and what pyulog cannot see in it. Also compiled into
-//! `ulog-runtime`'s CLI test (by path), so it depends on nothing but `ulog_runtime`, `serde_json`
-//! and std.
+//! `ulog-runtime`'s CLI test (by path, beside `files.rs` as `crate::files`), so it depends on
+//! nothing but `ulog_runtime`, `serde_json` and std.
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -25,29 +25,13 @@ pub fn under_ci() -> bool {
 /// (and a note on stderr); under CI it panics.
 pub fn corpus_files() -> Vec<PathBuf> {
     let dir = corpus_dir();
-    let mut files = Vec::new();
-    collect(&dir, &mut files);
-    files.sort();
+    let files = crate::files::ulg_files(&dir);
     if files.is_empty() {
         let msg = format!("no .ulg files under {} (set ULOG_CORPUS)", dir.display());
         assert!(!under_ci(), "{msg}");
         eprintln!("note: {msg}; corpus tests have nothing to check");
     }
     files
-}
-
-fn collect(dir: &Path, out: &mut Vec<PathBuf>) {
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return;
-    };
-    for entry in entries.flatten() {
-        let path = entry.path();
-        if path.is_dir() {
-            collect(&path, out);
-        } else if path.extension().is_some_and(|e| e == "ulg") {
-            out.push(path);
-        }
-    }
 }
 
 /// The pyulog oracle beside a corpus file (`FILE.ulg.oracle.json`), if there is one.

@@ -5,6 +5,7 @@
 //! (`CI=true`) a missing corpus fails the tests instead of skipping them.
 
 pub mod corpus;
+pub mod files;
 pub mod typed_check;
 
 pub use corpus::{corpus_dir, corpus_files, oracle, pyulog_blind_ranges, short_name, under_ci};

@@ -78,6 +78,16 @@ pub fn encode<T: ULog>(value: &T) -> Vec<u8> {
     out
 }
 
+/// The oracle's instances (subscriptions with data) of a topic.
+pub fn oracle_instances<'o>(o: &'o Json, topic: &str) -> Vec<&'o Json> {
+    o["pyulog"]["subscriptions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|s| s["name"] == topic)
+        .collect()
+}
+
 /// What checking one topic of one file found.
 #[derive(Debug, Default)]
 pub struct FileCheck {
@@ -181,13 +191,7 @@ fn compare(
         g.streamed == g.all,
         "{name}: streaming and whole-file rows differ"
     );
-    let subs: Vec<&Json> = o["pyulog"]["subscriptions"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|s| s["name"] == topic)
-        .collect();
-    for s in subs {
+    for s in oracle_instances(o, topic) {
         let multi_id = u8::try_from(s["multi_id"].as_u64().unwrap()).unwrap();
         check.instances += 1;
         let mut ours = Vec::new();

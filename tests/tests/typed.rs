@@ -11,7 +11,7 @@ use std::path::Path;
 use serde_json::Value as Json;
 use ulog_runtime::typed::encode_row;
 use ulog_runtime::{Chars, Log, Scalar, Topic, TypedError, ULog};
-use ulog_tests::typed_check::{Columns, check_typed_file, columns};
+use ulog_tests::typed_check::{Columns, check_typed_file, columns, oracle_instances};
 use ulog_tests::{corpus_files, oracle, scalar_matches, short_name};
 
 /// Reads every PX4 generation's attitude: `rollspeed` left the topic in 2018 and
@@ -111,13 +111,7 @@ fn check_topic<T: Topic>(refuse: impl Fn(&Path) -> Option<String>) -> Tally {
         let Some(o) = oracle(&path) else { continue };
         let name = short_name(&path);
         let topic = T::FORMAT.name;
-        let subs: Vec<&Json> = o["pyulog"]["subscriptions"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .filter(|s| s["name"] == topic)
-            .collect();
-        if subs.is_empty() {
+        if oracle_instances(&o, topic).is_empty() {
             continue;
         }
         let log = Log::open(&path).unwrap();

@@ -10,6 +10,9 @@ use std::process::{Command, Output};
 #[path = "../../tests/src/corpus.rs"]
 #[allow(dead_code, unreachable_pub)]
 mod corpus;
+#[path = "../../tests/src/files.rs"]
+#[allow(unreachable_pub)]
+mod files;
 
 use corpus::{corpus_dir, corpus_files, pyulog_blind_ranges, short_name, under_ci};
 
@@ -493,4 +496,34 @@ fn errors_are_one_line_with_the_file_and_offset() {
     let out = ulog(&["params", "--default", "nonsense", garbage.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2), "usage errors exit with 2");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_closed_output_pipe_is_not_an_error() {
+    use std::io::Read;
+    // Megabytes of output: far more than a pipe buffers.
+    let path = corpus_dir().join("pyulog/sample_log_small.ulg");
+    if !path.exists() {
+        assert!(!under_ci(), "corpus missing");
+        return;
+    }
+    let mut child = Command::new(env!("CARGO_BIN_EXE_ulog"))
+        .args(["json", path.to_str().unwrap()])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = [0u8; 16];
+    child.stdout.take().unwrap().read_exact(&mut first).unwrap(); // then the pipe closes
+    let out = child.wait_with_output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        out.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }

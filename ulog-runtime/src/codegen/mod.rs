@@ -410,7 +410,13 @@ impl Builder {
                 .map(|d| d.place.clone())
                 .expect("a known format")
         };
-        for (name, error) in schema.resolve_all() {
+        // The first error of a format itself; a nested type's own error is reported under
+        // its own name, so `InvalidNested` adds nothing.
+        let first = schema
+            .resolve_all()
+            .into_iter()
+            .find(|(_, e)| !matches!(e, LayoutError::InvalidNested { .. }));
+        if let Some((name, error)) = first {
             return Err(match error {
                 LayoutError::UnknownType {
                     format,
@@ -425,8 +431,6 @@ impl Builder {
                 LayoutError::Cycle(names) => CodegenError::Cycle {
                     cycle: names.iter().map(|n| (n.clone(), place_of(n))).collect(),
                 },
-                // A nested type's own error is reported under its name.
-                LayoutError::InvalidNested { .. } => continue,
                 other => CodegenError::Unsupported {
                     place: place_of(&name),
                     format: name,

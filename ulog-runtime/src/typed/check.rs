@@ -421,6 +421,20 @@ impl<T: Topic> TypedDecoder<T> {
         (data.len() >= self.min_len).then(|| T::decode(&self.plan, data))
     }
 
+    /// Decodes a row the log accepted for the checked format: such rows are at least the
+    /// format's size without trailing padding, and every field the plan reads lies before
+    /// that (only top-level trailing padding is left out of rows), so no length check is
+    /// needed per row.
+    #[inline]
+    pub(crate) fn decode_accepted(&self, data: &[u8]) -> T {
+        T::decode(&self.plan, data)
+    }
+
+    /// The length a row needs for every field the plan reads.
+    pub(crate) fn min_len(&self) -> usize {
+        self.min_len
+    }
+
     /// Decodes a row read from the file this decoder was checked against; `None` for a row
     /// of another topic.
     #[inline]

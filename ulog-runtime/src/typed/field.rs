@@ -174,18 +174,18 @@ impl<E: Element> FieldValue for E {
     }
 }
 
-/// `N` as an array length of a format; a larger `N` fails to compile.
-const fn array_len(n: usize) -> Option<u16> {
+/// `N` as an array length of a format; another `N` fails to compile.
+const fn array_len(n: usize) -> u16 {
     assert!(
         n >= 1 && n <= u16::MAX as usize,
         "ULog array lengths are 1..=65535"
     );
-    Some(n as u16)
+    n as u16
 }
 
 impl<E: Element, const N: usize> FieldValue for [E; N] {
     const KIND: TypedKind = E::KIND;
-    const ARRAY_LEN: Option<u16> = array_len(N);
+    const ARRAY_LEN: Option<u16> = Some(array_len(N));
     #[inline]
     fn encode_field(&self, out: &mut Vec<u8>) {
         for e in self {
@@ -201,7 +201,7 @@ impl<E: Element, const N: usize> FieldValue for [E; N] {
 
 impl<const N: usize> FieldValue for Chars<N> {
     const KIND: TypedKind = TypedKind::Primitive(Primitive::Char);
-    const ARRAY_LEN: Option<u16> = array_len(N);
+    const ARRAY_LEN: Option<u16> = Some(array_len(N));
     #[inline]
     fn encode_field(&self, out: &mut Vec<u8>) {
         out.extend_from_slice(&self.0);
@@ -246,9 +246,6 @@ pub trait Padding: Sized {
 }
 
 impl<const N: usize> Padding for [u8; N] {
-    const LEN: u16 = match array_len(N) {
-        Some(n) => n,
-        None => 0,
-    };
+    const LEN: u16 = array_len(N);
     const ZERO: [u8; N] = [0; N];
 }

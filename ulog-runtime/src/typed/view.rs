@@ -52,6 +52,10 @@ impl Log<'_> {
             .filter(|s| s.format() == Some(decoder.format()))
             .map(|s| s.index())
             .collect();
+        debug_assert!(subs.iter().all(|&i| {
+            let sizes = self.subscriptions()[i].payload_sizes();
+            sizes.is_some_and(|(min, _)| min >= decoder.min_len())
+        }));
         if subs.is_empty() {
             return Err(TypedError::NotLogged {
                 topic: T::FORMAT.name.to_owned(),
@@ -167,17 +171,12 @@ impl<T: Topic> Iterator for TypedRows<'_, T> {
 
     #[inline]
     fn next(&mut self) -> Option<T> {
-        loop {
-            let (_, data) = self.merge.next()?;
-            // Every row the log accepted is long enough for the checked plan.
-            if let Some(value) = self.decoder.decode(data) {
-                return Some(value);
-            }
-        }
+        let (_, data) = self.merge.next()?;
+        Some(self.decoder.decode_accepted(data))
     }
 
     fn size_hint(&self) -> (usize, Option<usize>) {
-        (0, Some(self.merge.len()))
+        (self.merge.len(), Some(self.merge.len()))
     }
 }
 
@@ -192,18 +191,18 @@ impl<T: Topic> Iterator for TopicRows<'_, T> {
 
     #[inline]
     fn next(&mut self) -> Option<(u8, T)> {
-        loop {
-            let (multi_id, data) = self.merge.next()?;
-            if let Some(value) = self.decoder.decode(data) {
-                return Some((multi_id, value));
-            }
-        }
+        let (multi_id, data) = self.merge.next()?;
+        Some((multi_id, self.decoder.decode_accepted(data)))
     }
 
     fn size_hint(&self) -> (usize, Option<usize>) {
-        (0, Some(self.merge.len()))
+        (self.merge.len(), Some(self.merge.len()))
     }
 }
+
+impl<T: Topic> ExactSizeIterator for TypedRows<'_, T> {}
+
+impl<T: Topic> ExactSizeIterator for TopicRows<'_, T> {}
 
 impl<T> fmt::Debug for TypedRows<'_, T> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {

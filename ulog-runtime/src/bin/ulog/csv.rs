@@ -3,9 +3,9 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use ulog_runtime::Log;
 use ulog_runtime::read::Subscription;
 use ulog_runtime::schema::{FieldKind, FormatId, Primitive, Schema};
+use ulog_runtime::{Log, Scalar};
 
 use crate::number::{f32_text, f64_text};
 use crate::{Failure, Progress};
@@ -98,28 +98,23 @@ fn flatten(
     }
 }
 
-/// A value as pyulog writes it: integers in decimal, `bool` and `char` as their signed byte,
-/// floats as numpy prints them (parsing gives back the stored value).
+/// A value as pyulog writes it: integers in decimal, `bool` and `char` as their signed byte
+/// (pyulog reads both as `int8`), floats as numpy prints them (parsing gives back the stored
+/// value).
 fn write_number(out: &mut String, p: Primitive, b: &[u8]) {
     use std::fmt::Write as _;
-    let _ = match p {
-        Primitive::Int8 | Primitive::Bool | Primitive::Char => write!(out, "{}", b[0] as i8),
-        Primitive::UInt8 => write!(out, "{}", b[0]),
-        Primitive::Int16 => write!(out, "{}", i16::from_le_bytes([b[0], b[1]])),
-        Primitive::UInt16 => write!(out, "{}", u16::from_le_bytes([b[0], b[1]])),
-        Primitive::Int32 => write!(out, "{}", i32::from_le_bytes(b[..4].try_into().unwrap())),
-        Primitive::UInt32 => write!(out, "{}", u32::from_le_bytes(b[..4].try_into().unwrap())),
-        Primitive::Int64 => write!(out, "{}", i64::from_le_bytes(b[..8].try_into().unwrap())),
-        Primitive::UInt64 => write!(out, "{}", u64::from_le_bytes(b[..8].try_into().unwrap())),
-        Primitive::Float => {
-            out.push_str(&f32_text(f32::from_le_bytes(b[..4].try_into().unwrap())));
-            Ok(())
+    match Scalar::decode(p, b) {
+        Some(Scalar::Float(x)) => out.push_str(&f32_text(x)),
+        Some(Scalar::Double(x)) => out.push_str(&f64_text(x)),
+        // The raw byte: a `bool` of 0x41 is 65 for pyulog, not 1.
+        Some(Scalar::Bool(_)) => {
+            let _ = write!(out, "{}", b[0] as i8);
         }
-        Primitive::Double => {
-            out.push_str(&f64_text(f64::from_le_bytes(b[..8].try_into().unwrap())));
-            Ok(())
+        Some(other) => {
+            let _ = write!(out, "{other}");
         }
-    };
+        None => {}
+    }
 }
 
 /// Text up to the first zero byte, each byte one character (as pyulog's `chr`).

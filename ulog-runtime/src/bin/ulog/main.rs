@@ -97,11 +97,25 @@ enum Command {
 }
 
 /// An error for the one line `ulog` prints.
-struct Failure(String);
+struct Failure {
+    message: String,
+    /// The reader of our output went away (`ulog csv ... | head`): not an error.
+    broken_pipe: bool,
+}
 
-impl<E: std::fmt::Display> From<E> for Failure {
+impl<E: std::fmt::Display + 'static> From<E> for Failure {
     fn from(e: E) -> Failure {
-        Failure(e.to_string())
+        let any = &e as &dyn std::any::Any;
+        let kind = match any.downcast_ref::<io::Error>() {
+            Some(io) => Some(io.kind()),
+            None => any
+                .downcast_ref::<serde_json::Error>()
+                .and_then(serde_json::Error::io_error_kind),
+        };
+        Failure {
+            message: e.to_string(),
+            broken_pipe: kind == Some(io::ErrorKind::BrokenPipe),
+        }
     }
 }
 
@@ -120,10 +134,11 @@ fn main() -> ExitCode {
     let result = run(cli.command, &mut out).and_then(|()| out.flush().map_err(Failure::from));
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        // A closed pipe (`ulog csv ... | head`) is not an error.
-        Err(Failure(e)) if e.contains("Broken pipe") => ExitCode::SUCCESS,
-        Err(Failure(e)) => {
-            eprintln!("ulog: {}: {e}", file.display());
+        Err(Failure {
+            broken_pipe: true, ..
+        }) => ExitCode::SUCCESS,
+        Err(Failure { message, .. }) => {
+            eprintln!("ulog: {}: {message}", file.display());
             ExitCode::FAILURE
         }
     }
