@@ -18,6 +18,10 @@ const CRATE: &str = "crate";
 const RENAME: &str = "rename";
 /// Field: a padding field.
 const PADDING: &str = "padding";
+/// Container or field: accept narrower file types (lossless widening).
+const WIDEN: &str = "widen";
+/// Container: every topic name the type stands for.
+const TOPICS: &str = "topics";
 
 /// A value with the span of the attribute that set it.
 pub(crate) struct WithSpan<T> {
@@ -31,6 +35,8 @@ pub(crate) struct ContainerAttrs {
     pub(crate) name: Option<WithSpan<String>>,
     pub(crate) exact: Option<Span>,
     pub(crate) krate: Option<Path>,
+    pub(crate) widen: Option<Span>,
+    pub(crate) topics: Option<Vec<LitStr>>,
 }
 
 /// Options of one field.
@@ -38,6 +44,7 @@ pub(crate) struct ContainerAttrs {
 pub(crate) struct FieldAttrs {
     pub(crate) rename: Option<WithSpan<String>>,
     pub(crate) padding: Option<Span>,
+    pub(crate) widen: Option<Span>,
 }
 
 /// Sets `slot` once; a second setting is an error at its key.
@@ -88,13 +95,26 @@ pub(crate) fn container(attrs: &[Attribute], errors: &mut Errors) -> ContainerAt
                 let lit: LitStr = meta.value()?.parse()?;
                 let path: Path = lit.parse()?;
                 set_once(&mut out.krate, path, &meta.path, errors);
+            } else if meta.path.is_ident(WIDEN) {
+                set_once(&mut out.widen, meta.path.span(), &meta.path, errors);
+            } else if meta.path.is_ident(TOPICS) {
+                let content;
+                syn::parenthesized!(content in meta.input);
+                let names = content
+                    .parse_terminated(<LitStr as syn::parse::Parse>::parse, syn::Token![,])?;
+                set_once(
+                    &mut out.topics,
+                    names.into_iter().collect(),
+                    &meta.path,
+                    errors,
+                );
             } else if meta.path.is_ident(RENAME) || meta.path.is_ident(PADDING) {
                 return Err(meta.error(format!(
                     "`{}` is a field attribute; put it on a field",
                     meta.path.get_ident().expect("checked")
                 )));
             } else {
-                return Err(unknown(&meta, &[NAME, EXACT, CRATE]));
+                return Err(unknown(&meta, &[NAME, EXACT, CRATE, WIDEN, TOPICS]));
             }
             Ok(())
         });
@@ -118,16 +138,19 @@ pub(crate) fn field(attrs: &[Attribute], errors: &mut Errors) -> FieldAttrs {
                 set_once(&mut out.rename, value, &meta.path, errors);
             } else if meta.path.is_ident(PADDING) {
                 set_once(&mut out.padding, meta.path.span(), &meta.path, errors);
+            } else if meta.path.is_ident(WIDEN) {
+                set_once(&mut out.widen, meta.path.span(), &meta.path, errors);
             } else if meta.path.is_ident(NAME)
                 || meta.path.is_ident(EXACT)
                 || meta.path.is_ident(CRATE)
+                || meta.path.is_ident(TOPICS)
             {
                 return Err(meta.error(format!(
                     "`{}` is a struct attribute; put it on the struct",
                     meta.path.get_ident().expect("checked")
                 )));
             } else {
-                return Err(unknown(&meta, &[RENAME, PADDING]));
+                return Err(unknown(&meta, &[RENAME, PADDING, WIDEN]));
             }
             Ok(())
         });

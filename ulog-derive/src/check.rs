@@ -18,7 +18,14 @@ const BASIC_TYPE_NAMES: [&str; 12] = [
 ];
 
 pub(crate) fn all(input: &Input<'_>, topic: &str, errors: &mut Errors) {
-    topic_name(input, topic, errors);
+    let span = input
+        .attrs
+        .name
+        .as_ref()
+        .map_or(input.ident.span(), |n| n.span);
+    topic_name(topic, span, errors);
+    topics(input, errors);
+    widen_not_exact(input, errors);
     for field in &input.fields {
         field_name(field, errors);
         padding_field(field, errors);
@@ -28,13 +35,52 @@ pub(crate) fn all(input: &Input<'_>, topic: &str, errors: &mut Errors) {
     unique_names(input, errors);
 }
 
-/// A topic name follows the format grammar: `a-z A-Z 0-9 _ - /`, not a basic type name.
-fn topic_name(input: &Input<'_>, topic: &str, errors: &mut Errors) {
-    let span = input
+/// Every name of `topics(...)` is a valid topic name, listed once.
+fn topics(input: &Input<'_>, errors: &mut Errors) {
+    let Some(topics) = &input.attrs.topics else {
+        return;
+    };
+    if topics.is_empty() {
+        errors.push(syn::Error::new(
+            input.ident.span(),
+            "`topics(...)` needs at least one topic name",
+        ));
+    }
+    let mut seen = Vec::new();
+    for lit in topics {
+        let name = lit.value();
+        topic_name(&name, lit.span(), errors);
+        if seen.contains(&name) {
+            errors.push(syn::Error::new(
+                lit.span(),
+                format!("topic `{name}` is listed twice in `topics(...)`"),
+            ));
+        }
+        seen.push(name);
+    }
+}
+
+/// Exact mode requires identical types, so widening contradicts it.
+fn widen_not_exact(input: &Input<'_>, errors: &mut Errors) {
+    if input.attrs.exact.is_none() {
+        return;
+    }
+    let widen = input
         .attrs
-        .name
-        .as_ref()
-        .map_or(input.ident.span(), |n| n.span);
+        .widen
+        .into_iter()
+        .chain(input.fields.iter().filter_map(|f| f.attrs.widen));
+    for span in widen {
+        errors.push(syn::Error::new(
+            span,
+            "`widen` contradicts `exact` (exact mode requires the file's types to be identical); \
+             remove one of them",
+        ));
+    }
+}
+
+/// A topic name follows the format grammar: `a-z A-Z 0-9 _ - /`, not a basic type name.
+fn topic_name(topic: &str, span: proc_macro2::Span, errors: &mut Errors) {
     let bad = topic
         .chars()
         .find(|c| !(c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '/')));
@@ -99,6 +145,12 @@ fn padding_field(field: &FieldInput<'_>, errors: &mut Errors) {
         errors.push(syn::Error::new(
             rename.span,
             "padding fields are named `_paddingN` in the file; remove `rename`",
+        ));
+    }
+    if let Some(widen) = field.attrs.widen {
+        errors.push(syn::Error::new(
+            widen,
+            "padding is never read, so it cannot widen; remove `widen`",
         ));
     }
 }

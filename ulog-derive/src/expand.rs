@@ -46,16 +46,95 @@ fn type_text(ty: &syn::Type) -> String {
     s
 }
 
-pub(crate) fn expand(input: &Input<'_>, topic: &str) -> TokenStream {
-    let ident = input.ident;
+/// The path of the runtime's hidden module, `::ulog_runtime::__private` by default.
+fn private_path(input: &Input<'_>) -> TokenStream {
     let krate: Path = input
         .attrs
         .krate
         .clone()
         .unwrap_or_else(|| syn::parse_quote!(::ulog_runtime));
-    let p = quote!(#krate::__private);
+    quote!(#krate::__private)
+}
+
+/// Every topic name: the format's own first, then the others of `topics(...)`.
+fn topic_names(input: &Input<'_>, topic: &str) -> Vec<String> {
+    let mut names = vec![topic.to_owned()];
+    for lit in input.attrs.topics.iter().flatten() {
+        let name = lit.value();
+        if !names.contains(&name) {
+            names.push(name);
+        }
+    }
+    names
+}
+
+/// What is emitted beside the errors of an input that has some: the checks of the field
+/// types (so one build shows them too) and impls that satisfy the traits without doing
+/// anything, so code using the type does not fail again for lack of them.
+pub(crate) fn fallback(input: &Input<'_>) -> TokenStream {
+    let ident = input.ident;
+    let p = private_path(input);
+    let rust_type = ident.to_string();
+    let checks = input.fields.iter().map(|field| {
+        let ty = field.ty;
+        if field.attrs.padding.is_some() {
+            quote_spanned!(ty.span()=> __ulog_padding::<#ty>();)
+        } else {
+            quote_spanned!(ty.span()=> __ulog_field::<#ty>();)
+        }
+    });
+    let timestamp = input
+        .fields
+        .iter()
+        .any(|f| f.attrs.padding.is_none() && f.ulog_name().0 == "timestamp");
+    let topic_impl = timestamp.then(|| quote! { impl #p::Topic for #ident {} });
+    quote! {
+        #[doc(hidden)]
+        #[allow(non_upper_case_globals, unused_qualifications, dead_code, clippy::all, clippy::pedantic)]
+        const _: () = {
+            fn __ulog_field<T: #p::FieldValue>() {}
+            fn __ulog_padding<T: #p::Padding>() {}
+            fn __ulog_field_types() {
+                #(#checks)*
+            }
+
+            impl #p::ULog for #ident {
+                const FORMAT: #p::TypedFormat = #p::TypedFormat {
+                    name: "",
+                    topics: &[],
+                    rust_type: #rust_type,
+                    fields: &[],
+                    exact: false,
+                };
+                fn encode(&self, _: &mut #p::Vec<u8>) {
+                    ::core::unreachable!("the derive failed")
+                }
+                fn decode(_: &#p::DecodePlan, _: &[u8]) -> Self {
+                    ::core::unreachable!("the derive failed")
+                }
+            }
+
+            impl #p::Element for #ident {
+                const KIND: #p::TypedKind = #p::nested_kind::<Self>();
+                fn encode_element(&self, _: &mut #p::Vec<u8>) {
+                    ::core::unreachable!("the derive failed")
+                }
+                fn decode_at(_: &#p::FieldPlan, _: &[u8], _: usize) -> Self {
+                    ::core::unreachable!("the derive failed")
+                }
+            }
+
+            #topic_impl
+        };
+    }
+}
+
+pub(crate) fn expand(input: &Input<'_>, topic: &str) -> TokenStream {
+    let ident = input.ident;
+    let p = private_path(input);
     let rust_type = ident.to_string();
     let exact = input.attrs.exact.is_some();
+    let topics = topic_names(input, topic);
 
     let mut descriptors = Vec::new();
     let mut encodes = Vec::new();
@@ -77,6 +156,7 @@ pub(crate) fn expand(input: &Input<'_>, topic: &str) -> TokenStream {
                     array_len: ::core::option::Option::Some(#pad::LEN),
                     padding: true,
                     optional: false,
+                    widen: false,
                     rust_type: #text,
                 }
             });
@@ -86,6 +166,7 @@ pub(crate) fn expand(input: &Input<'_>, topic: &str) -> TokenStream {
         }
         let (name, _) = field.ulog_name();
         has_timestamp |= name == "timestamp";
+        let widen = input.attrs.widen.is_some() || field.attrs.widen.is_some();
         let value = quote_spanned!(ty.span()=> <#ty as #p::FieldValue>);
         descriptors.push(quote! {
             #p::TypedField {
@@ -94,11 +175,17 @@ pub(crate) fn expand(input: &Input<'_>, topic: &str) -> TokenStream {
                 array_len: #value::ARRAY_LEN,
                 padding: false,
                 optional: #value::OPTIONAL,
+                widen: #widen,
                 rust_type: #text,
             }
         });
         encodes.push(quote! { #value::encode_field(&self.#member, out); });
-        decodes.push(quote! { #member: #value::decode_field(plan.field(#i), row) });
+        let decode = if widen {
+            quote!(decode_field_widened)
+        } else {
+            quote!(decode_field)
+        };
+        decodes.push(quote! { #member: #value::#decode(plan.field(#i), row) });
     }
 
     let topic_impl = has_timestamp.then(|| quote! { impl #p::Topic for #ident {} });
@@ -120,6 +207,7 @@ pub(crate) fn expand(input: &Input<'_>, topic: &str) -> TokenStream {
             impl #p::ULog for #ident {
                 const FORMAT: #p::TypedFormat = #p::TypedFormat {
                     name: #topic,
+                    topics: &[#(#topics),*],
                     rust_type: #rust_type,
                     fields: &[#(#descriptors),*],
                     exact: #exact,

@@ -23,20 +23,25 @@ pub(crate) type Errors = Vec<syn::Error>;
 pub fn derive_ulog(input: TokenStream) -> TokenStream {
     let input = parse_macro_input!(input as DeriveInput);
     let mut errors = Errors::new();
-    let expanded = ast::parse(&input, &mut errors).and_then(|parsed| {
-        let topic = parsed.attrs.name.as_ref().map_or_else(
-            || expand::snake_case(&parsed.ident.to_string()),
-            |n| n.value.clone(),
-        );
-        check::all(&parsed, &topic, &mut errors);
-        errors.is_empty().then(|| expand::expand(&parsed, &topic))
-    });
-    match expanded {
-        Some(tokens) if errors.is_empty() => tokens.into(),
-        _ => errors
-            .into_iter()
-            .map(|e| e.to_compile_error())
-            .collect::<proc_macro2::TokenStream>()
-            .into(),
+    let Some(parsed) = ast::parse(&input, &mut errors) else {
+        return compile_errors(errors).into();
+    };
+    let topic = parsed.attrs.name.as_ref().map_or_else(
+        || expand::snake_case(&parsed.ident.to_string()),
+        |n| n.value.clone(),
+    );
+    check::all(&parsed, &topic, &mut errors);
+    if errors.is_empty() {
+        expand::expand(&parsed, &topic).into()
+    } else {
+        // Beside the errors: the field-type checks, and impls that keep code using the type
+        // from failing again.
+        let mut tokens = compile_errors(errors);
+        tokens.extend(expand::fallback(&parsed));
+        tokens.into()
     }
+}
+
+fn compile_errors(errors: Errors) -> proc_macro2::TokenStream {
+    errors.into_iter().map(|e| e.to_compile_error()).collect()
 }

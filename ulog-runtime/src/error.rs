@@ -6,8 +6,23 @@ use crate::read::MalformedMessage;
 use crate::schema::{FormatError, Redefinition};
 use crate::value::PlanError;
 
+/// `Debug` as the `Display` text, for errors: `fn main() -> Result<(), Box<dyn Error>>`
+/// prints an error it returns with `Debug`, and that should read as well as the message.
+macro_rules! debug_as_display {
+    ($($ty:ty),* $(,)?) => {$(
+        impl ::std::fmt::Debug for $ty {
+            fn fmt(&self, f: &mut ::std::fmt::Formatter<'_>) -> ::std::fmt::Result {
+                ::std::fmt::Display::fmt(self, f)
+            }
+        }
+    )*};
+}
+pub(crate) use debug_as_display;
+
+debug_as_display!(ReadError);
+
 /// An error that stops reading a file.
-#[derive(Debug, thiserror::Error)]
+#[derive(thiserror::Error)]
 #[non_exhaustive]
 pub enum ReadError {
     /// Reading the input failed.

@@ -37,7 +37,7 @@ pub mod write;
 
 pub use error::{Diagnostic, DiagnosticKind, ReadError};
 pub use read::{Event, Log, Row, StreamReader};
-pub use typed::{Chars, Topic, TypedError, ULog};
+pub use typed::{Char, Chars, Topic, TypedError, ULog};
 #[cfg(feature = "derive")]
 pub use ulog_derive::ULog;
 pub use value::{Scalar, Value};

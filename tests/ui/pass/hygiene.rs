@@ -24,6 +24,15 @@ struct Inner {
 }
 
 #[derive(ulog_runtime::ULog)]
+#[ulog(widen, topics("hygienic_widened", "also_widened"))]
+struct Widened {
+    timestamp: u64,
+    #[ulog(widen)]
+    wide: [f64; 2],
+    one: ulog_runtime::Char,
+}
+
+#[derive(ulog_runtime::ULog)]
 #[ulog(name = "hygienic_topic", exact)]
 struct Hygienic {
     timestamp: u64,
@@ -37,4 +46,5 @@ struct Hygienic {
 fn main() {
     let fields = <Hygienic as ulog_runtime::ULog>::FORMAT.fields.len();
     ::std::assert_eq!(fields, 5);
+    ::std::assert_eq!(<Widened as ulog_runtime::ULog>::FORMAT.topics.len(), 3);
 }

@@ -73,8 +73,10 @@ pub use input::Place;
 
 use crate::schema::{LayoutError, Schema};
 
+crate::error::debug_as_display!(CodegenError);
+
 /// Why generation failed.
-#[derive(Debug, thiserror::Error)]
+#[derive(thiserror::Error)]
 #[non_exhaustive]
 pub enum CodegenError {
     /// An input or output file could not be read or written.

@@ -146,6 +146,12 @@ impl<R: Read> StreamReader<R> {
         TypedDecoder::new(self.metadata().schema())
     }
 
+    /// [`StreamReader::typed`] for the topic named `topic`, read as `T` (one type for the
+    /// topics that share a layout: see [`Log::topic_as`](crate::Log::topic_as)).
+    pub fn typed_as<T: Topic>(&self, topic: &str) -> Result<TypedDecoder<T>, TypedError> {
+        TypedDecoder::new_as(self.metadata().schema(), topic)
+    }
+
     /// The next event, or `None` at the end of the file.
     #[allow(clippy::should_implement_trait)]
     pub fn next_event(&mut self) -> Result<Option<Event<'_>>, ReadError> {

@@ -4,6 +4,7 @@
 use std::fmt;
 use std::marker::PhantomData;
 
+use super::widen::{FloatLoader, IntLoader, loaders, widens};
 use super::{Topic, TypedField, TypedFormat, TypedKind};
 use crate::read::Row;
 use crate::schema::{FieldKind, FormatId, LayoutError, Schema};
@@ -16,13 +17,30 @@ pub struct DecodePlan {
 }
 
 /// Where one struct field lives in the file's layout.
-#[derive(Debug, Clone)]
+#[derive(Clone)]
 pub struct FieldPlan {
     offset: usize,
     stride: usize,
     present: bool,
     nested: Option<Box<DecodePlan>>,
+    /// For `#[ulog(widen)]` fields: readers of the file's type (chosen once by the check).
+    load_int: IntLoader,
+    load_float: FloatLoader,
 }
+
+impl fmt::Debug for FieldPlan {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("FieldPlan")
+            .field("offset", &self.offset)
+            .field("stride", &self.stride)
+            .field("present", &self.present)
+            .field("nested", &self.nested)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Loaders of a field that never converts.
+const NO_LOADERS: (IntLoader, FloatLoader) = (|_, _| 0, |_, _| 0.0);
 
 impl FieldPlan {
     const ABSENT: FieldPlan = FieldPlan {
@@ -30,7 +48,21 @@ impl FieldPlan {
         stride: 0,
         present: false,
         nested: None,
+        load_int: NO_LOADERS.0,
+        load_float: NO_LOADERS.1,
     };
+
+    /// A widened field's value at `offset`, read as the file's type, as `i64`.
+    #[inline(always)]
+    pub fn load_int(&self, row: &[u8], offset: usize) -> i64 {
+        (self.load_int)(row, offset)
+    }
+
+    /// A widened field's value at `offset`, read as the file's type, as `f64`.
+    #[inline(always)]
+    pub fn load_float(&self, row: &[u8], offset: usize) -> f64 {
+        (self.load_float)(row, offset)
+    }
 
     /// Byte offset of the field (its first element) from the start of the enclosing format.
     #[inline(always)]
@@ -65,12 +97,21 @@ impl DecodePlan {
     /// Compares `format` (and the formats it nests) with the file's format of the same name in
     /// `schema`; every difference is collected into one [`TypedError::Mismatch`].
     pub fn check(format: &'static TypedFormat, schema: &Schema) -> Result<DecodePlan, TypedError> {
-        let id = schema
-            .id(format.name)
-            .ok_or_else(|| TypedError::NoSuchTopic {
-                topic: format.name.to_owned(),
-                rust_type: format.rust_type,
-            })?;
+        DecodePlan::check_as(format, format.name, schema)
+    }
+
+    /// [`DecodePlan::check`] against the file's format named `topic`: a type read under
+    /// another topic name with the same layout (PX4's `# TOPICS`).
+    pub fn check_as(
+        format: &'static TypedFormat,
+        topic: &str,
+        schema: &Schema,
+    ) -> Result<DecodePlan, TypedError> {
+        let id = schema.id(topic).ok_or_else(|| TypedError::NoSuchTopic {
+            topic: topic.to_owned(),
+            rust_type: format.rust_type,
+            suggestions: closest_names(topic, schema.formats().iter().map(|f| f.name.as_str())),
+        })?;
         let resolved;
         let schema = if schema.resolved(id).is_some() {
             schema
@@ -79,7 +120,7 @@ impl DecodePlan {
             owned
                 .layout(id)
                 .map_err(|error| TypedError::InvalidFormat {
-                    topic: format.name.to_owned(),
+                    topic: topic.to_owned(),
                     error,
                 })?;
             resolved = owned;
@@ -90,7 +131,7 @@ impl DecodePlan {
         match plan {
             Some(plan) if mismatches.is_empty() => Ok(plan),
             _ => Err(TypedError::Mismatch {
-                topic: format.name.to_owned(),
+                topic: topic.to_owned(),
                 rust_type: format.rust_type,
                 mismatches,
             }),
@@ -128,7 +169,8 @@ fn check_format(
     };
     if tf.exact {
         let file = schema.format(id);
-        let rust = tf.to_format();
+        // The topic may be read under another name (`check_as`): compare the fields.
+        let rust = tf.to_format_as(&file.name);
         if *file != rust {
             out.push(Mismatch {
                 path: prefix.trim_end_matches('.').to_owned(),
@@ -163,12 +205,14 @@ fn check_format(
             fields.push(FieldPlan::ABSENT);
             continue;
         };
+        let widen = field.widen && !tf.exact;
         let type_mismatch = || Mismatch {
             path: path.clone(),
             kind: MismatchKind::Type {
                 file: file_type(schema, file_field.kind, file_field.array_len),
                 rust: field.rust_type.to_owned(),
                 rust_struct: tf.rust_type,
+                widen,
             },
         };
         if file_field.array_len != field.array_len {
@@ -176,8 +220,16 @@ fn check_format(
             fields.push(FieldPlan::ABSENT);
             continue;
         }
+        let mut load = NO_LOADERS;
         let nested = match (field.kind, file_field.kind) {
-            (TypedKind::Primitive(a), FieldKind::Primitive(b)) if a == b => None,
+            (TypedKind::Primitive(a), FieldKind::Primitive(b))
+                if a == b || (widen && widens(b, a)) =>
+            {
+                if widen {
+                    load = loaders(b);
+                }
+                None
+            }
             (TypedKind::Nested(inner), FieldKind::Nested(inner_id))
                 if schema.format(inner_id).name == inner.name =>
             {
@@ -198,6 +250,8 @@ fn check_format(
             stride: file_field.elem_size,
             present: true,
             nested,
+            load_int: load.0,
+            load_float: load.1,
         });
     }
     Some(DecodePlan {
@@ -239,6 +293,9 @@ pub enum MismatchKind {
         rust: String,
         /// The struct that has the field.
         rust_struct: &'static str,
+        /// Whether the field widens (`#[ulog(widen)]`): then the file's type is one it
+        /// cannot hold every value of.
+        widen: bool,
     },
     /// A field the struct requires and the file lacks.
     Missing {
@@ -269,10 +326,17 @@ impl fmt::Display for Mismatch {
                 file,
                 rust,
                 rust_struct,
-            } => write!(
-                f,
-                "{path} is {file} in the file, {rust} in struct {rust_struct}"
-            ),
+                widen,
+            } => {
+                write!(
+                    f,
+                    "{path} is {file} in the file, {rust} in struct {rust_struct}"
+                )?;
+                if *widen {
+                    f.write_str(" (not a lossless widening)")?;
+                }
+                Ok(())
+            }
             MismatchKind::Missing { rust_struct } => write!(
                 f,
                 "{path} is in struct {rust_struct} but not in the file \
@@ -303,16 +367,18 @@ impl fmt::Display for Mismatch {
 }
 
 /// Why a typed view of a file could not be made.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[derive(Clone, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]
 pub enum TypedError {
     /// The file defines no format of this name.
-    #[error("the file has no format `{topic}` (wanted by struct {rust_type})")]
+    #[error("the file has no format `{topic}` (wanted by struct {rust_type}){}", did_you_mean(.suggestions))]
     NoSuchTopic {
         /// The topic.
         topic: String,
         /// The struct.
         rust_type: &'static str,
+        /// The file's format names closest to `topic` (at most 3, closest first).
+        suggestions: Vec<String>,
     },
     /// The file defines the format but never subscribes to it.
     #[error("`{topic}` is defined in the file but was never logged (no subscription)")]
@@ -339,7 +405,7 @@ pub enum TypedError {
         error: LayoutError,
     },
     /// The struct does not match the file's format; every difference is listed.
-    #[error("{}", mismatch_lines(.topic, .mismatches))]
+    #[error("{}", mismatch_lines(.topic, .rust_type, .mismatches))]
     Mismatch {
         /// The topic.
         topic: String,
@@ -350,9 +416,78 @@ pub enum TypedError {
     },
 }
 
-fn mismatch_lines(topic: &str, mismatches: &[Mismatch]) -> String {
-    let lines: Vec<String> = mismatches.iter().map(|m| format!("{topic}: {m}")).collect();
-    lines.join("; ")
+crate::error::debug_as_display!(TypedError);
+
+/// One difference on one line; several as a list, one per line.
+fn mismatch_lines(topic: &str, rust_type: &str, mismatches: &[Mismatch]) -> String {
+    match mismatches {
+        [one] => format!("{topic}: {one}"),
+        many => {
+            let mut text = format!(
+                "{topic}: {} differences between the file and struct {rust_type}:",
+                many.len()
+            );
+            for m in many {
+                text.push_str("\n  ");
+                text.push_str(&m.to_string());
+            }
+            text
+        }
+    }
+}
+
+/// `; did you mean `a` or `b`?`, or nothing.
+fn did_you_mean(suggestions: &[String]) -> String {
+    match suggestions {
+        [] => String::new(),
+        [one] => format!("; did you mean `{one}`?"),
+        many => {
+            let quoted: Vec<String> = many.iter().map(|s| format!("`{s}`")).collect();
+            let (last, rest) = quoted.split_last().expect("many");
+            format!("; did you mean {} or {last}?", rest.join(", "))
+        }
+    }
+}
+
+/// The names closest to `name` by edit distance (and those containing it), at most 3: the
+/// suggestions of an error about a name that does not exist.
+pub(crate) fn closest_names<'a>(
+    name: &str,
+    candidates: impl Iterator<Item = &'a str>,
+) -> Vec<String> {
+    let limit = (name.chars().count() / 3).max(2);
+    let mut scored: Vec<(usize, &str)> = candidates
+        .filter_map(|c| {
+            let d = edit_distance(name, c);
+            let contains = c.contains(name) || name.contains(c);
+            (d <= limit || contains && !c.is_empty()).then_some((d, c))
+        })
+        .collect();
+    scored.sort();
+    scored.dedup();
+    scored
+        .into_iter()
+        .take(3)
+        .map(|(_, c)| c.to_owned())
+        .collect()
+}
+
+/// Levenshtein distance over characters.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diag = row[0];
+        row[0] = i + 1;
+        for (j, &cb) in b.iter().enumerate() {
+            let next = (diag + usize::from(ca != cb))
+                .min(row[j] + 1)
+                .min(row[j + 1] + 1);
+            diag = row[j + 1];
+            row[j + 1] = next;
+        }
+    }
+    row[b.len()]
 }
 
 /// A checked decoder of one topic's rows: made once against a file's formats, then decoding
@@ -404,8 +539,14 @@ impl<T: Topic> TypedDecoder<T> {
     /// Checks `T` against the format of the same name in `schema` (a file's:
     /// [`Metadata::schema`](crate::read::Metadata::schema)).
     pub fn new(schema: &Schema) -> Result<TypedDecoder<T>, TypedError> {
-        let plan = DecodePlan::check(&T::FORMAT, schema)?;
-        let format = schema.id(T::FORMAT.name).expect("checked above");
+        TypedDecoder::new_as(schema, T::FORMAT.name)
+    }
+
+    /// Checks `T` against the format named `topic` in `schema`: `T` read under another topic
+    /// name with the same layout (see [`TypedFormat::topics`](super::TypedFormat::topics)).
+    pub fn new_as(schema: &Schema, topic: &str) -> Result<TypedDecoder<T>, TypedError> {
+        let plan = DecodePlan::check_as(&T::FORMAT, topic, schema)?;
+        let format = schema.id(topic).expect("checked above");
         let min_len = read_end(&plan, &T::FORMAT);
         Ok(TypedDecoder {
             plan,
@@ -465,9 +606,10 @@ fn read_end(plan: &DecodePlan, tf: &TypedFormat) -> usize {
         .map(|(p, f): (&FieldPlan, &TypedField)| {
             let count = f.array_len.map_or(1, usize::from);
             let last_start = p.offset + count.saturating_sub(1) * p.stride;
+            // The file's element size: a widened field reads fewer bytes than its Rust type.
             let last_len = match (f.kind, &p.nested) {
                 (TypedKind::Nested(inner), Some(nested)) => read_end(nested, inner),
-                _ => super::kind_size(f.kind),
+                _ => p.stride,
             };
             last_start + last_len
         })

@@ -75,7 +75,7 @@ impl<const N: usize> fmt::Display for Chars<N> {
 #[diagnostic::on_unimplemented(
     message = "`{Self}` cannot be an element of a ULog array",
     label = "not a ULog element type",
-    note = "array elements are u8, i8, u16, i16, u32, i32, u64, i64, f32, f64, bool, or a struct deriving `ULog`; arrays of arrays (multi-dimensional) do not exist in ULog: flatten them to one `[T; N]`"
+    note = "array elements are u8, i8, u16, i16, u32, i32, u64, i64, f32, f64, bool, `Char`, or a struct deriving `ULog`; arrays of arrays (multi-dimensional) do not exist in ULog: flatten them to one `[T; N]`"
 )]
 pub trait Element: Sized {
     /// The ULog type of one element.
@@ -85,13 +85,19 @@ pub trait Element: Sized {
     /// Decodes the element at `offset` of `row`; `plan` is the field's (its nested plan for
     /// nested types).
     fn decode_at(plan: &FieldPlan, row: &[u8], offset: usize) -> Self;
+    /// Decodes the element of a `#[ulog(widen)]` field: the file's type may be narrower, and
+    /// the plan's loader for it converts. Types that do not widen decode as usual.
+    #[inline(always)]
+    fn decode_at_widened(plan: &FieldPlan, row: &[u8], offset: usize) -> Self {
+        Self::decode_at(plan, row, offset)
+    }
 }
 
 /// A Rust type usable as a field of a `#[derive(ULog)]` struct.
 #[diagnostic::on_unimplemented(
     message = "`{Self}` cannot be a ULog field",
     label = "not a ULog field type",
-    note = "ULog fields are u8, i8, u16, i16, u32, i32, u64, i64, f32, f64, bool, `Chars<N>` (char[N] text), arrays `[T; N]` of those, structs deriving `ULog` and arrays of them, or `Option` of any of these (a field the file may lack)"
+    note = "ULog fields are u8, i8, u16, i16, u32, i32, u64, i64, f32, f64, bool, `Char` (one char byte), `Chars<N>` (char[N] text), arrays `[T; N]` of those, structs deriving `ULog` and arrays of them, or `Option` of any of these (a field the file may lack)"
 )]
 pub trait FieldValue: Sized {
     /// The ULog element type.
@@ -104,6 +110,11 @@ pub trait FieldValue: Sized {
     fn encode_field(&self, out: &mut Vec<u8>);
     /// Decodes the field from a row through its plan.
     fn decode_field(plan: &FieldPlan, row: &[u8]) -> Self;
+    /// Decodes a `#[ulog(widen)]` field, whose file type may be narrower.
+    #[inline(always)]
+    fn decode_field_widened(plan: &FieldPlan, row: &[u8]) -> Self {
+        Self::decode_field(plan, row)
+    }
 }
 
 /// Reads `N` bytes at `offset`; the decode plan guarantees they are inside the row.
@@ -115,7 +126,7 @@ fn bytes_at<const N: usize>(row: &[u8], offset: usize) -> [u8; N] {
 }
 
 macro_rules! numeric_elements {
-    ($($ty:ty => $prim:ident),* $(,)?) => {$(
+    ($($ty:ty => $prim:ident, $loader:ident),* $(,)?) => {$(
         impl Element for $ty {
             const KIND: TypedKind = TypedKind::Primitive(Primitive::$prim);
             #[inline]
@@ -126,13 +137,22 @@ macro_rules! numeric_elements {
             fn decode_at(_: &FieldPlan, row: &[u8], offset: usize) -> $ty {
                 <$ty>::from_le_bytes(bytes_at(row, offset))
             }
+            /// The check accepted only file types whose every value this type holds, so the
+            /// conversion is exact.
+            #[inline(always)]
+            #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+            fn decode_at_widened(plan: &FieldPlan, row: &[u8], offset: usize) -> $ty {
+                plan.$loader(row, offset) as $ty
+            }
         }
     )*};
 }
 
 numeric_elements! {
-    u8 => UInt8, i8 => Int8, u16 => UInt16, i16 => Int16, u32 => UInt32, i32 => Int32,
-    u64 => UInt64, i64 => Int64, f32 => Float, f64 => Double,
+    u8 => UInt8, load_int, i8 => Int8, load_int, u16 => UInt16, load_int,
+    i16 => Int16, load_int, u32 => UInt32, load_int, i32 => Int32, load_int,
+    u64 => UInt64, load_int, i64 => Int64, load_int, f32 => Float, load_float,
+    f64 => Double, load_float,
 }
 
 impl Element for bool {
@@ -145,6 +165,47 @@ impl Element for bool {
     #[inline(always)]
     fn decode_at(_: &FieldPlan, row: &[u8], offset: usize) -> bool {
         row[offset] != 0
+    }
+}
+
+/// A single `char` field (`char c;`): one byte, not text. pyulog shows it as a signed byte;
+/// [`Char::as_char`] gives the character of an ASCII byte. `char[N]` text is [`Chars<N>`].
+///
+/// ```
+/// use ulog_runtime::{Char, ULog};
+/// #[derive(ULog)]
+/// struct Sample { timestamp: u64, mode: Char }
+/// assert_eq!(Sample::FORMAT.to_format().to_string(), "sample:uint64_t timestamp;char mode;");
+/// assert_eq!(Char(b'A').as_char(), Some('A'));
+/// ```
+#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
+pub struct Char(pub u8);
+
+impl Char {
+    /// The character, if the byte is ASCII.
+    pub fn as_char(self) -> Option<char> {
+        self.0.is_ascii().then_some(char::from(self.0))
+    }
+}
+
+impl fmt::Debug for Char {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.as_char() {
+            Some(c) => write!(f, "Char({c:?})"),
+            None => write!(f, "Char({:#04x})", self.0),
+        }
+    }
+}
+
+impl Element for Char {
+    const KIND: TypedKind = TypedKind::Primitive(Primitive::Char);
+    #[inline]
+    fn encode_element(&self, out: &mut Vec<u8>) {
+        out.push(self.0);
+    }
+    #[inline(always)]
+    fn decode_at(_: &FieldPlan, row: &[u8], offset: usize) -> Char {
+        Char(row[offset])
     }
 }
 
@@ -172,6 +233,10 @@ impl<E: Element> FieldValue for E {
     fn decode_field(plan: &FieldPlan, row: &[u8]) -> E {
         E::decode_at(plan, row, plan.offset())
     }
+    #[inline(always)]
+    fn decode_field_widened(plan: &FieldPlan, row: &[u8]) -> E {
+        E::decode_at_widened(plan, row, plan.offset())
+    }
 }
 
 /// `N` as an array length of a format; another `N` fails to compile.
@@ -196,6 +261,11 @@ impl<E: Element, const N: usize> FieldValue for [E; N] {
     fn decode_field(plan: &FieldPlan, row: &[u8]) -> [E; N] {
         let (start, stride) = (plan.offset(), plan.stride());
         std::array::from_fn(|i| E::decode_at(plan, row, start + i * stride))
+    }
+    #[inline]
+    fn decode_field_widened(plan: &FieldPlan, row: &[u8]) -> [E; N] {
+        let (start, stride) = (plan.offset(), plan.stride());
+        std::array::from_fn(|i| E::decode_at_widened(plan, row, start + i * stride))
     }
 }
 
@@ -230,6 +300,11 @@ impl<F: FieldValue> FieldValue for Option<F> {
     #[inline]
     fn decode_field(plan: &FieldPlan, row: &[u8]) -> Option<F> {
         plan.is_present().then(|| F::decode_field(plan, row))
+    }
+    #[inline]
+    fn decode_field_widened(plan: &FieldPlan, row: &[u8]) -> Option<F> {
+        plan.is_present()
+            .then(|| F::decode_field_widened(plan, row))
     }
 }
 

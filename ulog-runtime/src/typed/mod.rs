@@ -39,6 +39,7 @@
 //! |---|---|
 //! | `u8` `i8` `u16` `i16` `u32` `i32` `u64` `i64` `f32` `f64` | `uint8_t` ... `int64_t`, `float`, `double` |
 //! | `bool` | `bool` (any non-zero byte reads as `true`) |
+//! | [`Char`] | `char`: one byte, not text (rare in PX4) |
 //! | [`Chars<N>`] | `char[N]`, text without terminator when it fills the array |
 //! | `[T; N]` of the above (not `Chars`) or of a nested type | `type[N]` |
 //! | a struct deriving `ULog` | the nested format (its own name) |
@@ -53,12 +54,16 @@
 //! | attribute | on | effect |
 //! |---|---|---|
 //! | `#[ulog(name = "esc_status")]` | struct | the format name (default: the struct name in snake case) |
+//! | `#[ulog(topics("vehicle_attitude", "estimator_attitude"))]` | struct | every topic the type stands for (PX4's `# TOPICS`): [`TypedFormat::topics`]; read and write under any with [`Log::topic_as`](crate::Log::topic_as) and [`Writer::topic_as`](crate::Writer::topic_as) |
 //! | `#[ulog(exact)]` | struct | reading requires the file's format to be identical: fields, order, padding |
+//! | `#[ulog(widen)]` | struct or field | numeric fields also accept narrower file types they hold every value of (see below) |
 //! | `#[ulog(crate = "path")]` | struct | where the runtime crate is, for code that renames `ulog-runtime` |
 //! | `#[ulog(rename = "type")]` | field | the field's name in the file |
 //! | `#[ulog(padding)]` | field (`[u8; N]`) | written as zeros and named `_paddingK` (K counts padding fields); trailing padding is left out of data rows, as PX4 does |
 //!
-//! Each key may appear once; every mistake of a struct is reported at once, at its span.
+//! Each key may appear once; every mistake of a struct is reported at once, at its span, the
+//! field types included (a struct with errors still gets placeholder impls, so code using
+//! it shows no follow-on errors). `widen` and `exact` contradict each other.
 //! The derive also refuses, at compile time: enums, unions, tuple and unit structs, generics,
 //! names the format grammar forbids, two fields with one name after renames, a `timestamp`
 //! that is not an unsigned integer, and a struct larger than one data message (65,533 bytes).
@@ -69,23 +74,34 @@
 //! Reading compares the struct with the file's format of the same name, once, before any row
 //! ([`DecodePlan::check`]):
 //! - fields match by name, in any order; padding is skipped on both sides but its bytes count;
-//! - types and array lengths must be equal (no silent widening), nested types recursively;
+//! - types and array lengths must be equal, nested types recursively; a `widen` field also
+//!   takes a narrower type it can hold every value of ([`widens`]): an unsigned integer
+//!   takes unsigned ones of at most its size, a signed integer signed ones of at most its
+//!   size and smaller unsigned ones, `f64` takes `float` and integers of up to 32 bits, `f32`
+//!   integers of up to 16 bits; never a lossy one (signed into unsigned, `int64_t` into
+//!   `f64`), elementwise for arrays of equal length. The plan keeps one loader per widened
+//!   field, chosen by the check, so rows convert without branching on types. Writing a
+//!   widened type writes its own (wider) format;
 //! - fields only the file has are ignored; a struct field the file lacks is an error unless it
 //!   is an `Option`;
 //! - in exact mode any difference is an error.
 //!
 //! Every difference is reported in one [`TypedError::Mismatch`], e.g.
-//! `esc_status: esc[].esc_rpm is int32_t in the file, f32 in struct EscReport`. After the
+//! `esc_status: esc[].esc_rpm is int32_t in the file, f32 in struct EscReport` (several: one
+//! per line). A topic the file lacks suggests the closest names it has. After the
 //! check, decoding a row is reads at offsets the plan holds: no allocation for fixed-size
 //! types, no lookups by name.
 
 mod check;
 pub(crate) mod field;
 mod view;
+mod widen;
 
+pub(crate) use check::closest_names;
 pub use check::{DecodePlan, FieldPlan, Mismatch, MismatchKind, TypedDecoder, TypedError};
-pub use field::{Chars, Element, FieldValue, Padding};
+pub use field::{Char, Chars, Element, FieldValue, Padding};
 pub use view::{TopicRows, TypedRows, TypedTopic};
+pub use widen::{common_type, widens};
 
 use crate::schema::{Field, Format, Primitive, TypeRef};
 
@@ -117,8 +133,13 @@ pub trait Topic: ULog {}
 /// The static description of a typed format.
 #[derive(Debug)]
 pub struct TypedFormat {
-    /// The format name.
+    /// The format name: the topic it is read and written as by default.
     pub name: &'static str,
+    /// Every topic name the type stands for (`#[ulog(topics(...))]`, PX4's `# TOPICS`), its
+    /// own `name` first. [`Log::topic_as`](crate::Log::topic_as) and
+    /// [`Writer::topic_as`](crate::Writer::topic_as) take any of them (or any other name
+    /// whose format matches).
+    pub topics: &'static [&'static str],
     /// The Rust type, for messages.
     pub rust_type: &'static str,
     /// The fields, in declaration order.
@@ -140,6 +161,9 @@ pub struct TypedField {
     pub padding: bool,
     /// Whether the field may be absent from a file (then it decodes as `None`).
     pub optional: bool,
+    /// Whether the field accepts narrower file types it can hold every value of
+    /// (`#[ulog(widen)]`): `uint8_t` into `u32`, `float` into `f64`...
+    pub widen: bool,
     /// The Rust type of the element, for messages (`f32`, `EscReport`).
     pub rust_type: &'static str,
 }
@@ -156,8 +180,13 @@ pub enum TypedKind {
 impl TypedFormat {
     /// The format as a schema [`Format`].
     pub fn to_format(&self) -> Format {
+        self.to_format_as(self.name)
+    }
+
+    /// The format under another topic name (the nested formats keep theirs).
+    pub fn to_format_as(&self, topic: &str) -> Format {
         Format {
-            name: self.name.to_owned(),
+            name: topic.to_owned(),
             fields: self
                 .fields
                 .iter()
@@ -175,6 +204,11 @@ impl TypedFormat {
 
     /// This format and every format it nests, each once, nested ones first.
     pub fn formats(&'static self) -> Vec<Format> {
+        self.formats_as(self.name)
+    }
+
+    /// [`TypedFormat::formats`], the last (this one) under the topic name `topic`.
+    pub fn formats_as(&'static self, topic: &str) -> Vec<Format> {
         let mut out: Vec<Format> = Vec::new();
         let mut stack: Vec<(&'static TypedFormat, bool)> = vec![(self, false)];
         while let Some((f, expanded)) = stack.pop() {
@@ -182,7 +216,11 @@ impl TypedFormat {
                 continue;
             }
             if expanded {
-                out.push(f.to_format());
+                out.push(if std::ptr::eq(f, self) {
+                    f.to_format_as(topic)
+                } else {
+                    f.to_format()
+                });
                 continue;
             }
             stack.push((f, true));

@@ -146,9 +146,12 @@ fn a_mismatch_names_the_topic_every_path_and_both_sides() {
     let err = TypedDecoder::<EscStatus>::new(&s).unwrap_err();
     assert_eq!(
         err.to_string(),
-        "esc_status: esc_count is uint16_t in the file, u8 in struct EscStatus; \
-         esc_status: esc is esc_report[4] in the file, [EscReport; 2] in struct EscStatus"
+        "esc_status: 2 differences between the file and struct EscStatus:\n  \
+         esc_count is uint16_t in the file, u8 in struct EscStatus\n  \
+         esc is esc_report[4] in the file, [EscReport; 2] in struct EscStatus"
     );
+    // `?` in `main` prints `Debug`: the same text, one difference per line.
+    assert_eq!(format!("{err:?}"), err.to_string());
     let s = schema(&[
         "esc_status:uint64_t timestamp;uint8_t esc_count;esc_report[2] esc;",
         "esc_report:float esc_rpm;double esc_voltage;",
@@ -156,8 +159,9 @@ fn a_mismatch_names_the_topic_every_path_and_both_sides() {
     let err = TypedDecoder::<EscStatus>::new(&s).unwrap_err();
     assert_eq!(
         err.to_string(),
-        "esc_status: esc[].esc_rpm is float in the file, i32 in struct EscReport; \
-         esc_status: esc[].esc_voltage is double in the file, f32 in struct EscReport"
+        "esc_status: 2 differences between the file and struct EscStatus:\n  \
+         esc[].esc_rpm is float in the file, i32 in struct EscReport\n  \
+         esc[].esc_voltage is double in the file, f32 in struct EscReport"
     );
     let TypedError::Mismatch { mismatches, .. } = err else {
         panic!("a mismatch")
@@ -233,6 +237,18 @@ fn absent_topics_are_their_own_errors() {
     assert_eq!(
         err.unwrap_err().to_string(),
         "the file has no format `sensor` (wanted by struct ExactSensor)"
+    );
+    // Close names are suggested, closest first.
+    let err = TypedDecoder::<ExactSensor>::new(&schema(&[
+        "sensors:uint64_t timestamp;",
+        "sensor_combined:uint64_t timestamp;",
+        "battery:uint64_t timestamp;",
+        "senso:uint64_t timestamp;",
+    ]));
+    assert_eq!(
+        err.unwrap_err().to_string(),
+        "the file has no format `sensor` (wanted by struct ExactSensor); did you mean \
+         `senso`, `sensors` or `sensor_combined`?"
     );
     let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
     w.define::<ExactSensor>().unwrap();
@@ -352,24 +368,290 @@ fn a_second_layout_under_one_name_is_refused_and_the_file_stays_valid() {
 }
 
 #[test]
-fn formats_after_the_definitions_section_are_refused() {
+fn topics_are_declared_before_rows_and_formats_refused_after() {
     #[derive(ULog)]
     struct Late {
         timestamp: u64,
     }
+    #[derive(ULog)]
+    struct Later {
+        timestamp: u64,
+    }
     let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    // Several topics before the first row: the obvious first program works.
     let a = w.topic::<EscStatus>(0).unwrap();
-    let err = w.topic::<Late>(0).unwrap_err();
+    let late = w.topic::<Late>(0).unwrap();
+    w.info("sys_name", &crate::Value::String("test".into()))
+        .unwrap();
+    w.write(&a, &status(1, 1)).unwrap();
+    // Once rows are written, a new format cannot be read by anyone any more: refused.
+    let err = w.topic::<Later>(0).unwrap_err();
     assert!(
-        matches!(&err, crate::WriteError::DefinitionsClosed(n) if n == "late"),
+        matches!(&err, crate::WriteError::DefinitionsClosed(n) if n == "later"),
         "{err}"
     );
     // Formats already written stay usable: a second instance of the same topic.
     let b = w.topic::<EscStatus>(1).unwrap();
-    w.write(&a, &status(1, 1)).unwrap();
     w.write(&b, &status(2, 2)).unwrap();
-    let log = Log::from_vec(w.into_inner()).unwrap();
-    assert!(log.diagnostics().is_empty());
+    w.write(&late, &Late { timestamp: 3 }).unwrap();
+    let bytes = w.into_inner();
+    let log = Log::from_slice(&bytes).unwrap();
+    assert!(log.diagnostics().is_empty(), "{:?}", log.diagnostics());
     assert_eq!(log.topic::<EscStatus>().unwrap().rows().count(), 2);
-    assert!(log.metadata().schema().get("late").is_none());
+    assert_eq!(log.topic::<Late>().unwrap().rows().count(), 1);
+    assert!(log.metadata().schema().get("later").is_none());
+    // The info written after the declarations is still in the definitions section, and the
+    // subscriptions come after it, in msg_id order.
+    assert!(log.metadata().info_value("sys_name").is_some());
+    let ids: Vec<(u16, &str)> = log
+        .subscriptions()
+        .iter()
+        .map(|s| (s.msg_id, s.name.as_str()))
+        .collect();
+    assert_eq!(ids, [(0, "esc_status"), (1, "late"), (2, "esc_status")]);
+    let first_a = bytes
+        .windows(3)
+        .position(|w| w[2] == b'A' && w[0] == 0x0d)
+        .unwrap();
+    let info = bytes.windows(3).position(|w| w[2] == b'I').unwrap();
+    assert!(info < first_a);
+}
+
+#[test]
+fn waiting_subscriptions_are_written_by_flush_and_drop() {
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    w.topic::<EscStatus>(0).unwrap();
+    let log = Log::from_vec(w.into_inner()).unwrap();
+    assert_eq!(log.subscriptions().len(), 1, "into_inner writes it");
+
+    let dir = std::env::temp_dir().join(format!("ulog-drop-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("declared.ulg");
+    {
+        let mut w = Writer::create(&path, WriterOptions::default()).unwrap();
+        w.topic::<EscStatus>(3).unwrap();
+    }
+    let log = Log::read(&path).unwrap();
+    assert_eq!(log.subscriptions()[0].multi_id, 3, "drop writes it");
+    std::fs::remove_dir_all(&dir).unwrap();
+
+    // A parameter after a declared topic is a change, as it was when subscribing wrote at once.
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    w.parameter("BEFORE", crate::read::ParamValue::Int32(1))
+        .unwrap();
+    w.topic::<EscStatus>(0).unwrap();
+    w.parameter("AFTER", crate::read::ParamValue::Int32(2))
+        .unwrap();
+    let log = Log::from_vec(w.into_inner()).unwrap();
+    assert_eq!(log.metadata().initial_parameters().len(), 1);
+    assert_eq!(log.parameter_changes()[0].name, "AFTER");
+}
+
+#[derive(ULog, Debug, PartialEq)]
+#[ulog(name = "battery_status", widen)]
+struct WideBattery {
+    timestamp: u64,
+    cell_count: i32,
+    voltage_v: f64,
+    cells: [u32; 2],
+    temperature: Option<f64>,
+}
+
+#[test]
+fn widened_fields_read_narrower_file_types_exactly() {
+    // Newer PX4: uint8_t cell_count, float voltage; older: int32_t and double.
+    let narrow = schema(&[
+        "battery_status:uint64_t timestamp;float voltage_v;uint16_t[2] cells;uint8_t cell_count;int16_t temperature;",
+    ]);
+    let decoder = TypedDecoder::<WideBattery>::new(&narrow).unwrap();
+    let mut row = 9u64.to_le_bytes().to_vec();
+    row.extend_from_slice(&15.7f32.to_le_bytes());
+    row.extend_from_slice(&65_535u16.to_le_bytes());
+    row.extend_from_slice(&7u16.to_le_bytes());
+    row.push(200);
+    row.extend_from_slice(&(-40i16).to_le_bytes());
+    assert_eq!(
+        decoder.decode(&row),
+        Some(WideBattery {
+            timestamp: 9,
+            cell_count: 200,
+            voltage_v: f64::from(15.7f32),
+            cells: [65_535, 7],
+            temperature: Some(-40.0),
+        })
+    );
+    let same = schema(&[
+        "battery_status:uint64_t timestamp;int32_t cell_count;double voltage_v;uint32_t[2] cells;",
+    ]);
+    let decoder = TypedDecoder::<WideBattery>::new(&same).unwrap();
+    let mut row = 1u64.to_le_bytes().to_vec();
+    row.extend_from_slice(&(-3i32).to_le_bytes());
+    row.extend_from_slice(&0.1f64.to_le_bytes());
+    row.extend_from_slice(&u32::MAX.to_le_bytes());
+    row.extend_from_slice(&0u32.to_le_bytes());
+    let got = decoder.decode(&row).unwrap();
+    assert_eq!(
+        (got.cell_count, got.voltage_v, got.cells, got.temperature),
+        (-3, 0.1, [u32::MAX, 0], None)
+    );
+}
+
+#[test]
+fn lossy_widening_is_refused_with_every_path() {
+    let s = schema(&[
+        "battery_status:uint64_t timestamp;uint32_t cell_count;int64_t voltage_v;int8_t[2] cells;",
+    ]);
+    let err = TypedDecoder::<WideBattery>::new(&s).unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "battery_status: 3 differences between the file and struct WideBattery:\n  \
+         cell_count is uint32_t in the file, i32 in struct WideBattery (not a lossless widening)\n  \
+         voltage_v is int64_t in the file, f64 in struct WideBattery (not a lossless widening)\n  \
+         cells is int8_t[2] in the file, [u32; 2] in struct WideBattery (not a lossless widening)"
+    );
+    // Without `widen` nothing but the same type is accepted.
+    #[derive(ULog, Debug)]
+    #[ulog(name = "battery_status")]
+    struct Strict {
+        timestamp: u64,
+        #[ulog(widen)]
+        cell_count: i32,
+        voltage_v: f64,
+    }
+    let s = schema(&["battery_status:uint64_t timestamp;uint8_t cell_count;float voltage_v;"]);
+    assert_eq!(
+        TypedDecoder::<Strict>::new(&s).unwrap_err().to_string(),
+        "battery_status: voltage_v is float in the file, f64 in struct Strict"
+    );
+    // Writing a widened type writes its own, wider format.
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    let sub = w.topic::<WideBattery>(0).unwrap();
+    let value = WideBattery {
+        timestamp: 4,
+        cell_count: -1,
+        voltage_v: 0.5,
+        cells: [1, 2],
+        temperature: Some(20.0),
+    };
+    w.write(&sub, &value).unwrap();
+    let log = Log::from_vec(w.into_inner()).unwrap();
+    assert_eq!(
+        log.metadata()
+            .schema()
+            .get("battery_status")
+            .unwrap()
+            .to_string(),
+        "battery_status:uint64_t timestamp;int32_t cell_count;double voltage_v;uint32_t[2] cells;double temperature;"
+    );
+    assert_eq!(
+        log.topic::<WideBattery>()
+            .unwrap()
+            .instance(0)
+            .unwrap()
+            .next(),
+        Some(value)
+    );
+}
+
+#[derive(ULog, Debug, Clone, PartialEq)]
+#[ulog(topics(
+    "vehicle_attitude",
+    "vehicle_attitude_groundtruth",
+    "estimator_attitude"
+))]
+struct VehicleAttitude {
+    timestamp: u64,
+    q: [f32; 4],
+    mode: crate::Char,
+}
+
+#[test]
+fn one_type_reads_and_writes_every_topic_of_its_layout() {
+    assert_eq!(
+        VehicleAttitude::FORMAT.topics,
+        [
+            "vehicle_attitude",
+            "vehicle_attitude_groundtruth",
+            "estimator_attitude"
+        ]
+    );
+    let value = |t| VehicleAttitude {
+        timestamp: t,
+        q: [1.0, 0.0, 0.0, t as f32],
+        mode: crate::Char(b'M'),
+    };
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    let own = w.topic::<VehicleAttitude>(0).unwrap();
+    let truth = w
+        .topic_as::<VehicleAttitude>("vehicle_attitude_groundtruth", 0)
+        .unwrap();
+    let est = w
+        .topic_as::<VehicleAttitude>("estimator_attitude", 1)
+        .unwrap();
+    w.write(&own, &value(1)).unwrap();
+    w.write(&truth, &value(2)).unwrap();
+    w.write(&est, &value(3)).unwrap();
+    let bytes = w.into_inner();
+    let log = Log::from_slice(&bytes).unwrap();
+    assert_eq!(
+        log.metadata()
+            .schema()
+            .get("estimator_attitude")
+            .unwrap()
+            .to_string(),
+        "estimator_attitude:uint64_t timestamp;float[4] q;char mode;"
+    );
+    let read = |topic: &str, multi_id| -> Vec<VehicleAttitude> {
+        log.topic_as::<VehicleAttitude>(topic)
+            .unwrap()
+            .instance(multi_id)
+            .unwrap()
+            .collect()
+    };
+    assert_eq!(read("vehicle_attitude", 0), [value(1)]);
+    assert_eq!(read("vehicle_attitude_groundtruth", 0), [value(2)]);
+    assert_eq!(read("estimator_attitude", 1), [value(3)]);
+    let topic = log
+        .topic_as::<VehicleAttitude>("estimator_attitude")
+        .unwrap();
+    assert_eq!(topic.name(), "estimator_attitude");
+    assert_eq!(
+        topic.instance(0).unwrap_err().to_string(),
+        "`estimator_attitude` has no instance 0 in the file (instances: [1])"
+    );
+    // The dynamic reader sees the `char` as its byte.
+    let row = log
+        .rows(log.subscription("estimator_attitude", 1).unwrap())
+        .next()
+        .unwrap();
+    assert_eq!(
+        row.value().unwrap().field("mode").unwrap().as_scalar(),
+        Some(crate::Scalar::Char(b'M'))
+    );
+    // Streaming, under the other name too.
+    let mut reader = StreamReader::new(&bytes[..]).unwrap();
+    let mut decoded = Vec::new();
+    let mut decoder = None;
+    while let Some(event) = reader.next_event().unwrap() {
+        match event {
+            Event::Subscription(s) if s.name == "vehicle_attitude_groundtruth" => {
+                decoder = Some(
+                    reader
+                        .typed_as::<VehicleAttitude>("vehicle_attitude_groundtruth")
+                        .unwrap(),
+                );
+            }
+            Event::Row(row) => decoded.extend(decoder.as_ref().and_then(|d| d.decode_row(&row))),
+            _ => {}
+        }
+    }
+    assert_eq!(decoded, [value(2)]);
+    // Checked like the type's own name: a different layout under the other name is refused.
+    let s = schema(&["estimator_attitude:uint64_t timestamp;float[3] q;char mode;"]);
+    assert_eq!(
+        TypedDecoder::<VehicleAttitude>::new_as(&s, "estimator_attitude")
+            .unwrap_err()
+            .to_string(),
+        "estimator_attitude: q is float[3] in the file, [f32; 4] in struct VehicleAttitude"
+    );
 }

@@ -9,6 +9,8 @@ use crate::read::Log;
 /// One topic of a [`Log`] read as `T` ([`Log::topic`]): checked against the file's format once.
 pub struct TypedTopic<'a, T> {
     log: &'a Log<'a>,
+    /// The topic name read (`T`'s own, or another given to [`Log::topic_as`]).
+    topic: String,
     decoder: TypedDecoder<T>,
     /// Indices of the topic's subscriptions, in file order.
     subs: Vec<usize>,
@@ -45,7 +47,35 @@ impl Log<'_> {
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn topic<T: Topic>(&self) -> Result<TypedTopic<'_, T>, TypedError> {
-        let decoder = TypedDecoder::<T>::new(self.metadata().schema())?;
+        self.topic_as(T::FORMAT.name)
+    }
+
+    /// The rows of the topic named `topic` read as `T`: one type for the topics PX4 logs
+    /// with one layout under several names (`# TOPICS` in its `.msg` files, e.g.
+    /// `vehicle_attitude` and `estimator_attitude`), checked against that topic's format as
+    /// [`Log::topic`] checks `T`'s own. [`TypedFormat::topics`](super::TypedFormat::topics)
+    /// lists the names a type declares; any other name whose format matches works too.
+    ///
+    /// ```
+    /// use ulog_runtime::{Log, ULog, Writer, WriterOptions};
+    ///
+    /// #[derive(ULog, Debug, PartialEq)]
+    /// #[ulog(topics("vehicle_attitude", "estimator_attitude"))]
+    /// struct VehicleAttitude { timestamp: u64, q: [f32; 4] }
+    ///
+    /// let mut w = Writer::new(Vec::new(), WriterOptions::default())?;
+    /// let est = w.topic_as::<VehicleAttitude>("estimator_attitude", 0)?;
+    /// w.write(&est, &VehicleAttitude { timestamp: 5, q: [1.0, 0.0, 0.0, 0.0] })?;
+    /// let log = Log::from_vec(w.into_inner())?;
+    ///
+    /// assert_eq!(VehicleAttitude::FORMAT.topics, ["vehicle_attitude", "estimator_attitude"]);
+    /// let rows: Vec<_> = log.topic_as::<VehicleAttitude>("estimator_attitude")?.instance(0)?.collect();
+    /// assert_eq!(rows[0].timestamp, 5);
+    /// assert!(log.topic::<VehicleAttitude>().is_err()); // not logged under its own name
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn topic_as<T: Topic>(&self, topic: &str) -> Result<TypedTopic<'_, T>, TypedError> {
+        let decoder = TypedDecoder::<T>::new_as(self.metadata().schema(), topic)?;
         let subs: Vec<usize> = self
             .subscriptions()
             .iter()
@@ -58,11 +88,12 @@ impl Log<'_> {
         }));
         if subs.is_empty() {
             return Err(TypedError::NotLogged {
-                topic: T::FORMAT.name.to_owned(),
+                topic: topic.to_owned(),
             });
         }
         Ok(TypedTopic {
             log: self,
+            topic: topic.to_owned(),
             decoder,
             subs,
         })
@@ -92,7 +123,7 @@ impl<'a, T: Topic> TypedTopic<'a, T> {
             .collect();
         if subs.is_empty() {
             return Err(TypedError::NoInstance {
-                topic: T::FORMAT.name.to_owned(),
+                topic: self.topic.clone(),
                 multi_id,
                 available: self.multi_ids(),
             });
@@ -109,6 +140,11 @@ impl<'a, T: Topic> TypedTopic<'a, T> {
             merge: self.merge(&self.subs),
             decoder: self.decoder.clone(),
         }
+    }
+
+    /// The topic name read.
+    pub fn name(&self) -> &str {
+        &self.topic
     }
 
     /// The checked decoder.

@@ -19,8 +19,10 @@ use crate::value::{Scalar, Value};
 #[cfg(test)]
 mod tests;
 
+crate::error::debug_as_display!(WriteError);
+
 /// Why a write was refused (nothing was written) or failed.
-#[derive(Debug, thiserror::Error)]
+#[derive(thiserror::Error)]
 #[non_exhaustive]
 pub enum WriteError {
     /// Writing to the output failed.
@@ -63,12 +65,12 @@ pub enum WriteError {
         /// Full size.
         max: usize,
     },
-    /// A new format after the definitions section ended (at the first subscription or logged
-    /// string): pyulog and PX4 tools would not see it.
+    /// A new format after the data section began (at the first row, logged string or other
+    /// data message): pyulog and PX4 tools would not see it.
     #[error(
-        "format `{0}` comes too late: formats must be written before the first subscription or \
-         logged string (readers ignore them in the data section); define every type first, \
-         e.g. with `Writer::define::<T>()`"
+        "format `{0}` comes too late: formats must be written before the first data row or \
+         logged string (readers ignore them in the data section); declare every topic \
+         (`Writer::topic`) or type (`Writer::define`) before writing rows"
     )]
     DefinitionsClosed(String),
     /// All 65,536 `msg_id`s are used.
@@ -154,6 +156,12 @@ struct Subscribed {
 
 /// Writes a ULog file to any `io::Write` (wrap files in `io::BufWriter`).
 ///
+/// A file has two sections: the definitions (formats, info, initial parameters) and the data
+/// (subscriptions, rows, logged strings, parameter changes). Subscriptions made while the
+/// definitions are open wait to be written until the data begins (the first row, logged
+/// string, parameter change, dropout, sync or unsubscription, or [`Writer::flush`]), so
+/// several topics can be declared, in any order, before the first row.
+///
 /// ```
 /// use ulog_runtime::write::{Writer, WriterOptions};
 /// let mut w = Writer::new(Vec::new(), WriterOptions { start_timestamp: 1_000, ..Default::default() })?;
@@ -170,13 +178,16 @@ struct Subscribed {
 /// ```
 #[derive(Debug)]
 pub struct Writer<W: Write> {
-    out: W,
+    /// Always `Some` but in `into_inner` (taken there, so that `Drop` finds nothing to do).
+    out: Option<W>,
     schema: Schema,
     subscriptions: Vec<Option<Subscribed>>,
     next_msg_id: u32,
     default_parameters: bool,
-    /// Whether the data section has begun (an `A`, `L` or `C` was written).
+    /// Whether the data section has begun: formats can no longer be written.
     data_section: bool,
+    /// Subscriptions made while the definitions were open, written when the data begins.
+    pending: Vec<(SubscriptionId, u8)>,
     buf: Vec<u8>,
     row: Vec<u8>,
 }
@@ -185,12 +196,13 @@ impl<W: Write> Writer<W> {
     /// Starts a file: the 16-byte header (version 1) and the flag bits.
     pub fn new(out: W, options: WriterOptions) -> Result<Writer<W>, WriteError> {
         let mut w = Writer {
-            out,
+            out: Some(out),
             schema: Schema::new(),
             subscriptions: Vec::new(),
             next_msg_id: 0,
             default_parameters: options.default_parameters,
             data_section: false,
+            pending: Vec::new(),
             buf: Vec::with_capacity(256),
             row: Vec::with_capacity(256),
         };
@@ -198,7 +210,7 @@ impl<W: Write> Writer<W> {
             version: 1,
             start_timestamp: options.start_timestamp,
         };
-        w.out.write_all(&header.to_bytes())?;
+        w.out().write_all(&header.to_bytes())?;
         let mut bits = FlagBits::default();
         if options.default_parameters {
             bits.compat[0] |= FlagBits::COMPAT_DEFAULT_PARAMETERS;
@@ -207,20 +219,30 @@ impl<W: Write> Writer<W> {
         Ok(w)
     }
 
+    fn out(&mut self) -> &mut W {
+        self.out
+            .as_mut()
+            .expect("the output is taken only by into_inner")
+    }
+
     /// The output.
     pub fn get_ref(&self) -> &W {
-        &self.out
-    }
-
-    /// Flushes and returns the output.
-    pub fn into_inner(mut self) -> W {
-        let _ = self.out.flush();
         self.out
+            .as_ref()
+            .expect("the output is taken only by into_inner")
     }
 
-    /// Flushes the output.
+    /// Writes the subscriptions still waiting (see [`Writer`]), flushes, and returns the
+    /// output. Errors are ignored here; call [`Writer::flush`] first to see them.
+    pub fn into_inner(mut self) -> W {
+        let _ = self.flush();
+        self.out.take().expect("the output is taken only here")
+    }
+
+    /// Writes the subscriptions still waiting (see [`Writer`]) and flushes the output.
     pub fn flush(&mut self) -> Result<(), WriteError> {
-        Ok(self.out.flush()?)
+        self.begin_data()?;
+        Ok(self.out().flush()?)
     }
 
     /// The formats written so far.
@@ -231,15 +253,36 @@ impl<W: Write> Writer<W> {
     fn put(&mut self, m: Message<'_>) -> Result<(), WriteError> {
         self.buf.clear();
         m.encode(&mut self.buf)?;
-        self.out.write_all(&self.buf)?;
+        let Writer { out, buf, .. } = self;
+        out.as_mut()
+            .expect("the output is taken only by into_inner")
+            .write_all(buf)?;
+        Ok(())
+    }
+
+    /// Ends the definitions section: the waiting subscriptions go out, in `msg_id` order.
+    fn begin_data(&mut self) -> Result<(), WriteError> {
+        self.data_section = true;
+        for (id, multi_id) in std::mem::take(&mut self.pending) {
+            let topic = self.subscriptions[usize::from(id.0)]
+                .as_ref()
+                .expect("pending subscriptions are registered")
+                .topic
+                .clone();
+            self.put(Message::Subscribe {
+                multi_id,
+                msg_id: id.0,
+                name: topic.as_bytes(),
+            })?;
+        }
         Ok(())
     }
 
     /// Writes a format definition (`F`) from its string, e.g.
     /// `vehicle_attitude:uint64_t timestamp;float[4] q;`. A format already written with the
     /// same definition is not written again; a different one under the same name is refused.
-    /// Formats belong to the definitions section: a new one after the first subscription or
-    /// logged string is refused ([`WriteError::DefinitionsClosed`]).
+    /// Formats belong to the definitions section: a new one once the data has begun (see
+    /// [`Writer`]) is refused ([`WriteError::DefinitionsClosed`]).
     pub fn format(&mut self, text: &str) -> Result<FormatId, WriteError> {
         let format = Format::parse(text).map_err(|error| WriteError::InvalidFormat {
             text: text.to_owned(),
@@ -292,9 +335,12 @@ impl<W: Write> Writer<W> {
     }
 
     /// Writes a parameter (`P`): its initial value before the first subscription, a change
-    /// after.
+    /// after (a change begins the data section, see [`Writer`]).
     pub fn parameter(&mut self, name: &str, value: ParamValue) -> Result<(), WriteError> {
         let (key_text, bytes) = param_key_value(name, value)?;
+        if !self.pending.is_empty() {
+            self.begin_data()?;
+        }
         self.put(Message::Parameter(KeyValue {
             key: key_text.as_bytes(),
             value: &bytes,
@@ -330,7 +376,9 @@ impl<W: Write> Writer<W> {
     }
 
     /// Subscribes a written format (`A`) as instance `multi_id`; the format and the formats it
-    /// nests must have been written. `msg_id`s are given in increasing order from 0.
+    /// nests must have been written. `msg_id`s are given in increasing order from 0. While
+    /// the definitions are open the subscription waits, and goes out when the data begins
+    /// (see [`Writer`]).
     pub fn subscribe(&mut self, format: &str, multi_id: u8) -> Result<SubscriptionId, WriteError> {
         let id = self
             .schema
@@ -343,12 +391,15 @@ impl<W: Write> Writer<W> {
         let (min, max) = (layout.payload_size, layout.size);
         let msg_id =
             u16::try_from(self.next_msg_id).map_err(|_| WriteError::TooManySubscriptions)?;
-        self.put(Message::Subscribe {
-            multi_id,
-            msg_id,
-            name: format.as_bytes(),
-        })?;
-        self.data_section = true;
+        if self.data_section {
+            self.put(Message::Subscribe {
+                multi_id,
+                msg_id,
+                name: format.as_bytes(),
+            })?;
+        } else {
+            self.pending.push((SubscriptionId(msg_id), multi_id));
+        }
         self.next_msg_id += 1;
         self.subscriptions.push(Some(Subscribed {
             topic: format.to_owned(),
@@ -359,32 +410,36 @@ impl<W: Write> Writer<W> {
     }
 
     /// Writes the formats of a [`ULog`] type (nested ones first, each once) without
-    /// subscribing it. [`Writer::topic`] does this itself, but formats must all come before
-    /// the first subscription: with several topics, define each first.
+    /// subscribing it. [`Writer::topic`] does this itself; formats must all be written
+    /// before the data begins (the first row or logged string).
     ///
     /// ```
     /// # use ulog_runtime::{ULog, Writer, WriterOptions};
     /// # #[derive(ULog)] struct Gps { timestamp: u64, alt: f32 }
-    /// # #[derive(ULog)] struct Baro { timestamp: u64, pressure: f32 }
     /// let mut w = Writer::new(Vec::new(), WriterOptions::default())?;
     /// w.define::<Gps>()?;
-    /// w.define::<Baro>()?;
     /// let gps = w.topic::<Gps>(0)?;
-    /// let baro = w.topic::<Baro>(0)?;
     /// # Ok::<(), ulog_runtime::WriteError>(())
     /// ```
     pub fn define<T: ULog>(&mut self) -> Result<FormatId, WriteError> {
+        self.define_as::<T>(T::FORMAT.name)
+    }
+
+    /// [`Writer::define`] with `T`'s format under the topic name `topic` (its nested formats
+    /// keep their names): one type for topics that share a layout.
+    pub fn define_as<T: ULog>(&mut self, topic: &str) -> Result<FormatId, WriteError> {
         let mut last = None;
-        for format in T::FORMAT.formats() {
+        for format in T::FORMAT.formats_as(topic) {
             last = Some(self.write_format(format)?);
         }
         Ok(last.expect("a format lists itself"))
     }
 
     /// Subscribes a typed topic as instance `multi_id`, writing its formats first (nested ones
-    /// included, each once per file) unless [`Writer::define`] already did. A different format
-    /// already written under one of its names is refused, and so is a new format after the
-    /// definitions section ended (see [`Writer::define`]).
+    /// included, each once per file). Several topics can be declared before the first row:
+    /// their formats go out at once, their subscriptions when the data begins. A different
+    /// format already written under one of its names is refused, and so is a new format
+    /// once the data has begun ([`WriteError::DefinitionsClosed`]).
     ///
     /// ```
     /// use ulog_runtime::{Chars, ULog, Writer, WriterOptions};
@@ -396,12 +451,17 @@ impl<W: Write> Writer<W> {
     /// #[ulog(name = "battery_status")]
     /// struct Battery { timestamp: u64, cells: [Cell; 2], id: Chars<4> }
     ///
+    /// #[derive(ULog)]
+    /// struct Gps { timestamp: u64, alt: f32 }
+    ///
     /// let mut w = Writer::new(Vec::new(), WriterOptions::default())?;
     /// let first = w.topic::<Battery>(0)?;
     /// let second = w.topic::<Battery>(1)?;
+    /// let gps = w.topic::<Gps>(0)?;
     /// let cells = [Cell { voltage: 3.9, _pad: [0; 4] }; 2];
     /// w.write(&first, &Battery { timestamp: 1, cells, id: Chars::new("A").unwrap() })?;
     /// w.write(&second, &Battery { timestamp: 2, cells, id: Chars::new("B").unwrap() })?;
+    /// w.write(&gps, &Gps { timestamp: 3, alt: 488.0 })?;
     /// let log = ulog_runtime::Log::from_vec(w.into_inner())?;
     /// let f = log.metadata().schema().get("battery_status").unwrap();
     /// assert_eq!(f.to_string(), "battery_status:uint64_t timestamp;cell[2] cells;char[4] id;");
@@ -409,8 +469,19 @@ impl<W: Write> Writer<W> {
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn topic<T: Topic>(&mut self, multi_id: u8) -> Result<TypedSubscription<T>, WriteError> {
-        self.define::<T>()?;
-        let id = self.subscribe(T::FORMAT.name, multi_id)?;
+        self.topic_as::<T>(T::FORMAT.name, multi_id)
+    }
+
+    /// [`Writer::topic`] under the topic name `topic`: `T`'s layout written and subscribed
+    /// as that topic (PX4 logs one layout under several names, e.g. `vehicle_attitude` and
+    /// `estimator_attitude`; see [`Log::topic_as`](crate::Log::topic_as)).
+    pub fn topic_as<T: Topic>(
+        &mut self,
+        topic: &str,
+        multi_id: u8,
+    ) -> Result<TypedSubscription<T>, WriteError> {
+        self.define_as::<T>(topic)?;
+        let id = self.subscribe(topic, multi_id)?;
         Ok(TypedSubscription {
             id,
             multi_id,
@@ -435,6 +506,7 @@ impl<W: Write> Writer<W> {
     /// Marks a subscription as no longer logged (`R`).
     pub fn unsubscribe(&mut self, id: SubscriptionId) -> Result<(), WriteError> {
         self.subscription(id)?;
+        self.begin_data()?;
         self.put(Message::Unsubscribe { msg_id: id.0 })
     }
 
@@ -457,6 +529,9 @@ impl<W: Write> Writer<W> {
                 max: sub.max,
             });
         }
+        if !self.data_section {
+            self.begin_data()?;
+        }
         self.put(Message::Data {
             msg_id: id.0,
             data: row,
@@ -465,14 +540,13 @@ impl<W: Write> Writer<W> {
 
     /// Writes a logged string (`L`); `level` is the ASCII digit PX4 writes (`b'6'` for info).
     pub fn log(&mut self, level: u8, timestamp: u64, text: &str) -> Result<(), WriteError> {
+        self.begin_data()?;
         self.put(Message::Logging {
             level,
             tag: None,
             timestamp,
             text: text.as_bytes(),
-        })?;
-        self.data_section = true;
-        Ok(())
+        })
     }
 
     /// Writes a tagged logged string (`C`).
@@ -483,23 +557,24 @@ impl<W: Write> Writer<W> {
         timestamp: u64,
         text: &str,
     ) -> Result<(), WriteError> {
+        self.begin_data()?;
         self.put(Message::Logging {
             level,
             tag: Some(tag),
             timestamp,
             text: text.as_bytes(),
-        })?;
-        self.data_section = true;
-        Ok(())
+        })
     }
 
     /// Writes a sync message (`S`), which lets readers recover from corruption.
     pub fn sync(&mut self) -> Result<(), WriteError> {
+        self.begin_data()?;
         self.put(Message::Sync)
     }
 
     /// Writes a dropout (`O`) of `duration_ms` milliseconds.
     pub fn dropout(&mut self, duration_ms: u16) -> Result<(), WriteError> {
+        self.begin_data()?;
         self.put(Message::Dropout { duration_ms })
     }
 }
@@ -567,6 +642,16 @@ pub(crate) fn push_scalar(out: &mut Vec<u8>, s: Scalar) {
     }
 }
 
+/// Writes the subscriptions still waiting (see [`Writer`]) and flushes, ignoring errors, as
+/// `io::BufWriter` does; call [`Writer::flush`] to see them.
+impl<W: Write> Drop for Writer<W> {
+    fn drop(&mut self) {
+        if self.out.is_some() {
+            let _ = self.flush();
+        }
+    }
+}
+
 impl Writer<io::BufWriter<std::fs::File>> {
     /// Creates (or truncates) a file and starts it; see [`Writer::new`]. Call
     /// [`Writer::flush`] (or drop the writer) when done.
@@ -623,12 +708,13 @@ impl Writer<std::fs::File> {
         }
         let next_msg_id = subscriptions.len() as u32;
         Ok(Writer {
-            out: file,
+            out: Some(file),
             schema,
             subscriptions,
             next_msg_id,
             default_parameters: bits.has_default_parameters(),
             data_section: true,
+            pending: Vec::new(),
             buf: Vec::with_capacity(256),
             row: Vec::with_capacity(256),
         })
