@@ -94,6 +94,33 @@ struct EscStatus {
     esc: [EscReport; 8],
 }
 
+/// One battery type for every PX4 generation: `cell_count` was `int32_t` before 2019 and is
+/// `uint8_t` since; `i32` holds both (`widen`).
+#[derive(ULog, Debug, Clone, PartialEq)]
+struct BatteryStatus {
+    timestamp: u64,
+    voltage_v: f32,
+    remaining: f32,
+    #[ulog(widen)]
+    cell_count: i32,
+    connected: bool,
+}
+
+/// The whole struct widens: `system_id` and `component_id` were `uint32_t` in older PX4 and
+/// are `uint8_t` now; `failure_detector_status` went from `uint8_t` to `uint16_t` (and the
+/// oldest logs lack it).
+#[derive(ULog, Debug, Clone, PartialEq)]
+#[ulog(widen)]
+struct VehicleStatus {
+    timestamp: u64,
+    nav_state: u8,
+    arming_state: u8,
+    system_id: u32,
+    component_id: u32,
+    failure_detector_status: Option<u32>,
+    failsafe: bool,
+}
+
 /// What one topic check found.
 #[derive(Default)]
 struct Tally {
@@ -174,6 +201,35 @@ fn vehicle_attitude_optional_fields_follow_the_file() {
             format.field("timestamp_sample").is_some()
         );
     }
+}
+
+#[test]
+fn battery_status_with_widening_reads_every_log_with_the_topic() {
+    let t = check_topic::<BatteryStatus>(never);
+    expect_some(&t, 8);
+    // Without `widen` the older logs are refused, as before.
+    #[derive(ULog, Debug)]
+    #[ulog(name = "battery_status")]
+    struct Strict {
+        timestamp: u64,
+        cell_count: i32,
+    }
+    let refused = corpus_files()
+        .iter()
+        .filter(|p| {
+            let log = Log::open(p).unwrap();
+            matches!(log.topic::<Strict>(), Err(TypedError::Mismatch { .. }))
+        })
+        .count();
+    if !corpus_files().is_empty() {
+        assert!(refused >= 3, "{refused}");
+    }
+}
+
+#[test]
+fn vehicle_status_with_widening_reads_every_log_with_the_topic() {
+    let t = check_topic::<VehicleStatus>(never);
+    expect_some(&t, 11);
 }
 
 #[test]

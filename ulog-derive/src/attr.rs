@@ -22,6 +22,8 @@ const PADDING: &str = "padding";
 const WIDEN: &str = "widen";
 /// Container: every topic name the type stands for.
 const TOPICS: &str = "topics";
+/// Container: only ever nested, never a topic (its `timestamp` may have any type).
+const NESTED: &str = "nested";
 
 /// A value with the span of the attribute that set it.
 pub(crate) struct WithSpan<T> {
@@ -37,6 +39,7 @@ pub(crate) struct ContainerAttrs {
     pub(crate) krate: Option<Path>,
     pub(crate) widen: Option<Span>,
     pub(crate) topics: Option<Vec<LitStr>>,
+    pub(crate) nested: Option<Span>,
 }
 
 /// Options of one field.
@@ -97,6 +100,8 @@ pub(crate) fn container(attrs: &[Attribute], errors: &mut Errors) -> ContainerAt
                 set_once(&mut out.krate, path, &meta.path, errors);
             } else if meta.path.is_ident(WIDEN) {
                 set_once(&mut out.widen, meta.path.span(), &meta.path, errors);
+            } else if meta.path.is_ident(NESTED) {
+                set_once(&mut out.nested, meta.path.span(), &meta.path, errors);
             } else if meta.path.is_ident(TOPICS) {
                 let content;
                 syn::parenthesized!(content in meta.input);
@@ -114,7 +119,7 @@ pub(crate) fn container(attrs: &[Attribute], errors: &mut Errors) -> ContainerAt
                     meta.path.get_ident().expect("checked")
                 )));
             } else {
-                return Err(unknown(&meta, &[NAME, EXACT, CRATE, WIDEN, TOPICS]));
+                return Err(unknown(&meta, &[NAME, EXACT, CRATE, WIDEN, TOPICS, NESTED]));
             }
             Ok(())
         });
@@ -144,6 +149,7 @@ pub(crate) fn field(attrs: &[Attribute], errors: &mut Errors) -> FieldAttrs {
                 || meta.path.is_ident(EXACT)
                 || meta.path.is_ident(CRATE)
                 || meta.path.is_ident(TOPICS)
+                || meta.path.is_ident(NESTED)
             {
                 return Err(meta.error(format!(
                     "`{}` is a struct attribute; put it on the struct",

@@ -3,7 +3,7 @@
 
 use std::collections::HashMap;
 
-use syn::{Type, TypeArray};
+use syn::{LitStr, Type, TypeArray};
 
 use crate::Errors;
 use crate::ast::{FieldInput, Input};
@@ -30,8 +30,11 @@ pub(crate) fn all(input: &Input<'_>, topic: &str, errors: &mut Errors) {
         field_name(field, errors);
         padding_field(field, errors);
         array_dimensions(field.ty, errors);
-        timestamp_type(field, errors);
+        if input.attrs.nested.is_none() {
+            timestamp_type(field, errors);
+        }
     }
+    nested_not_topic(input, errors);
     unique_names(input, errors);
 }
 
@@ -57,6 +60,16 @@ fn topics(input: &Input<'_>, errors: &mut Errors) {
             ));
         }
         seen.push(name);
+    }
+}
+
+/// A type only ever nested has no topic names.
+fn nested_not_topic(input: &Input<'_>, errors: &mut Errors) {
+    if let (Some(_), Some(topics)) = (input.attrs.nested, &input.attrs.topics) {
+        errors.push(syn::Error::new(
+            topics.first().map_or(input.ident.span(), LitStr::span),
+            "a `nested` type is never a topic, so it has no `topics(...)`",
+        ));
     }
 }
 
@@ -191,7 +204,8 @@ fn timestamp_type(field: &FieldInput<'_>, errors: &mut Errors) {
         errors.push(syn::Error::new_spanned(
             field.ty,
             "`timestamp` must be an unsigned integer of microseconds: `u64` \
-             (version-0 logs also used u32, u16, u8)",
+             (version-0 logs also used u32, u16, u8); a type that is only nested can say \
+             `#[ulog(nested)]`",
         ));
     }
 }

@@ -83,10 +83,11 @@ pub(crate) fn fallback(input: &Input<'_>) -> TokenStream {
             quote_spanned!(ty.span()=> __ulog_field::<#ty>();)
         }
     });
-    let timestamp = input
-        .fields
-        .iter()
-        .any(|f| f.attrs.padding.is_none() && f.ulog_name().0 == "timestamp");
+    let timestamp = input.attrs.nested.is_none()
+        && input
+            .fields
+            .iter()
+            .any(|f| f.attrs.padding.is_none() && f.ulog_name().0 == "timestamp");
     let topic_impl = timestamp.then(|| quote! { impl #p::Topic for #ident {} });
     quote! {
         #[doc(hidden)]
@@ -188,7 +189,8 @@ pub(crate) fn expand(input: &Input<'_>, topic: &str) -> TokenStream {
         decodes.push(quote! { #member: #value::#decode(plan.field(#i), row) });
     }
 
-    let topic_impl = has_timestamp.then(|| quote! { impl #p::Topic for #ident {} });
+    let topic_impl = (has_timestamp && input.attrs.nested.is_none())
+        .then(|| quote! { impl #p::Topic for #ident {} });
     let too_large = format!(
         "`{rust_type}` is too large for ULog: one data message carries at most 65533 bytes"
     );

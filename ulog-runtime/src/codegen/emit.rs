@@ -7,8 +7,9 @@ use proc_macro2::{Ident, Span, TokenStream};
 use quote::{format_ident, quote};
 
 use super::input::Definition;
-use super::{Builder, CodegenError};
-use crate::schema::{Field, Primitive, TypeRef, is_padding_name};
+use super::msg::{ConstValue, Constant};
+use super::{Builder, CodegenError, Resolved};
+use crate::schema::{Field, Format, Primitive, Schema, TypeRef, is_padding_name};
 
 /// Words Rust reserves: fields named so get a `_` suffix (and keep their ULog name).
 const KEYWORDS: &[&str] = &[
@@ -105,6 +106,16 @@ pub(crate) struct Names {
     pub(crate) modules: HashMap<String, String>,
 }
 
+/// Whether a format is a topic: it has a `timestamp` of an unsigned integer type (the
+/// derive then implements `Topic`).
+pub(crate) fn is_topic(format: &Format) -> bool {
+    format.fields.iter().any(|f| {
+        f.name == "timestamp"
+            && f.array_len.is_none()
+            && matches!(f.ty, TypeRef::Primitive(p) if p.is_unsigned_integer())
+    })
+}
+
 /// Unique Rust names for the definitions, in order.
 pub(crate) fn names(defs: &[Definition]) -> Names {
     let mut taken_types = HashSet::new();
@@ -115,9 +126,10 @@ pub(crate) fn names(defs: &[Definition]) -> Names {
     };
     for def in defs {
         let name = &def.format.name;
+        let wanted = def.rust_name.clone().unwrap_or_else(|| type_name(name));
         names
             .types
-            .insert(name.clone(), unique(type_name(name), &mut taken_types));
+            .insert(name.clone(), unique(wanted, &mut taken_types));
         names
             .modules
             .insert(name.clone(), unique(field_name(name), &mut taken_modules));
@@ -127,9 +139,10 @@ pub(crate) fn names(defs: &[Definition]) -> Names {
 
 pub(crate) fn render(
     builder: &Builder,
-    defs: &[Definition],
+    resolved: &Resolved,
     inputs: &[String],
 ) -> Result<String, CodegenError> {
+    let defs = &resolved.defs;
     let krate: syn::Path = parse("runtime crate path", &builder.runtime_crate)?;
     let vis: syn::Visibility = parse("visibility", &builder.visibility)?;
     let mut global_derives = Vec::new();
@@ -139,7 +152,15 @@ pub(crate) fn render(
     let names = names(defs);
     let mut items = Vec::new();
     for def in defs {
-        let item = one_type(builder, def, &names, &krate, &vis, &global_derives)?;
+        let item = one_type(
+            builder,
+            def,
+            &resolved.schema,
+            &names,
+            &krate,
+            &vis,
+            &global_derives,
+        )?;
         if builder.module_per_topic {
             let module = format_ident!("{}", names.modules[&def.format.name]);
             let doc = format!(" The `{}` format.", def.format.name);
@@ -170,9 +191,11 @@ pub(crate) fn render(
     Ok(out)
 }
 
+#[allow(clippy::too_many_arguments)]
 fn one_type(
     builder: &Builder,
     def: &Definition,
+    schema: &Schema,
     names: &Names,
     krate: &syn::Path,
     vis: &syn::Visibility,
@@ -182,16 +205,39 @@ fn one_type(
     let ident = Ident::new(&names.types[&format.name], Span::call_site());
     let mut doc = Vec::new();
     if let Some(text) = &def.doc {
-        doc.extend(text.lines().map(str::to_owned));
+        doc.extend(doc_text(text, def.plain_docs));
         doc.push(String::new());
     }
-    doc.push(format!(
-        "`ULog` format `{}`, from `{}`:",
-        format.name, def.place
-    ));
+    if def.merged > 0 {
+        doc.push(format!("`ULog` format `{}`, merged:", format.name));
+    } else {
+        doc.push(format!(
+            "`ULog` format `{}`, from `{}`:",
+            format.name,
+            def.place.doc_text()
+        ));
+    }
     doc.push(format!("`{format}`"));
+    if !def.topics.is_empty() {
+        doc.push(String::new());
+        let all: Vec<String> = std::iter::once(&format.name)
+            .chain(&def.topics)
+            .map(|t| format!("`{t}`"))
+            .collect();
+        doc.push(format!(
+            "Topics with this layout: {} (read others with `Log::topic_as`).",
+            all.join(", ")
+        ));
+    }
     let name = &format.name;
     let exact = def.exact.then(|| quote!(exact,));
+    let topics = (!def.topics.is_empty()).then(|| {
+        let all = std::iter::once(name).chain(&def.topics);
+        quote!(topics(#(#all),*),)
+    });
+    // A `timestamp` that is not an unsigned integer cannot be a topic's clock.
+    let nested =
+        (!is_topic(format) && format.field("timestamp").is_some()).then(|| quote!(nested,));
     let krate_text = quote!(#krate).to_string().replace(' ', "");
     // Extra derives, each once, and not again the ones every type gets.
     let mut derives: Vec<syn::Path> = Vec::new();
@@ -214,12 +260,15 @@ fn one_type(
     let mut underscore = false;
     for field in &format.fields {
         fields.push(one_field(
-            def,
+            &FieldContext {
+                def,
+                schema,
+                names,
+                krate,
+                vis,
+                builder,
+            },
             field,
-            names,
-            krate,
-            vis,
-            builder,
             &mut taken,
             &mut bools,
             &mut underscore,
@@ -234,42 +283,142 @@ fn one_type(
     }
     let allow = (!allows.is_empty()).then(|| quote!(#[allow(#(#allows),*)]));
     let doc = doc_lines(&doc);
+    let constants = constants(def, &ident, krate, vis);
     Ok(quote! {
         #(#[doc = #doc])*
         #[derive(#krate::ULog, Debug, Clone, PartialEq #(, #derives)*)]
-        #[ulog(name = #name, #exact crate = #krate_text)]
+        #[ulog(name = #name, #topics #exact #nested crate = #krate_text)]
         #allow
         #vis struct #ident {
             #(#fields)*
         }
+
+        #constants
     })
 }
 
-#[allow(clippy::too_many_arguments)]
-fn one_field(
+/// The constants of a `.msg` file, as associated constants.
+fn constants(
     def: &Definition,
-    field: &Field,
-    names: &Names,
+    ident: &Ident,
     krate: &syn::Path,
     vis: &syn::Visibility,
-    builder: &Builder,
+) -> Option<TokenStream> {
+    if def.constants.is_empty() {
+        return None;
+    }
+    let items = def.constants.iter().map(|c| {
+        let name = format_ident!("{}", const_ident(&c.name));
+        let (ty, value) = const_tokens(c, krate);
+        let mut doc = vec![format!(
+            "`{} {} = {}`",
+            super::msg::msg_type_name(c.ty),
+            c.name,
+            c.text
+        )];
+        if let Some(text) = &c.doc {
+            doc.push(String::new());
+            doc.extend(doc_text(text, true));
+        }
+        let doc = doc_lines(&doc);
+        let allow = (c.name.chars().any(|ch| ch.is_ascii_lowercase()))
+            .then(|| quote!(#[allow(non_upper_case_globals)]));
+        quote! {
+            #(#[doc = #doc])*
+            #allow
+            #vis const #name: #ty = #value;
+        }
+    });
+    let doc = format!(" The constants of `{}`.", def.place.doc_text());
+    Some(quote! {
+        #[doc = #doc]
+        #[allow(clippy::unreadable_literal)]
+        impl #ident {
+            #(#items)*
+        }
+    })
+}
+
+/// A constant's name as an identifier (`Self` and keywords get a `_` suffix).
+fn const_ident(name: &str) -> String {
+    if KEYWORDS.contains(&name) || name == "Self" {
+        format!("{name}_")
+    } else {
+        name.to_owned()
+    }
+}
+
+/// A constant's Rust type and value.
+fn const_tokens(c: &Constant, krate: &syn::Path) -> (TokenStream, TokenStream) {
+    use proc_macro2::Literal;
+    let ty = match c.ty {
+        Primitive::Char => quote!(#krate::Char),
+        p => {
+            let t = format_ident!("{}", rust_primitive(p));
+            quote!(#t)
+        }
+    };
+    let value = match (c.ty, c.value) {
+        (_, ConstValue::Bool(b)) => quote!(#b),
+        (Primitive::Float, ConstValue::Float(v)) => {
+            // The shortest text that gives the same f32: no excessive precision.
+            #[allow(clippy::cast_possible_truncation)]
+            let lit: TokenStream = format!("{:?}", v as f32).parse().expect("a float literal");
+            lit
+        }
+        (_, ConstValue::Float(v)) => {
+            let lit: TokenStream = format!("{v:?}").parse().expect("a float literal");
+            lit
+        }
+        (Primitive::Char, ConstValue::Int(v)) => {
+            let b = Literal::u8_unsuffixed(u8::try_from(v).expect("checked to fit"));
+            quote!(#krate::Char(#b))
+        }
+        (_, ConstValue::Int(v)) => {
+            let lit = Literal::i128_unsuffixed(v.abs());
+            if v < 0 { quote!(-#lit) } else { quote!(#lit) }
+        }
+    };
+    (ty, value)
+}
+
+/// What one field's code needs to know.
+struct FieldContext<'a> {
+    def: &'a Definition,
+    schema: &'a Schema,
+    names: &'a Names,
+    krate: &'a syn::Path,
+    vis: &'a syn::Visibility,
+    builder: &'a Builder,
+}
+
+fn one_field(
+    cx: &FieldContext<'_>,
+    field: &Field,
     taken: &mut HashSet<String>,
     bools: &mut usize,
     underscore: &mut bool,
 ) -> Result<TokenStream, CodegenError> {
+    let FieldContext {
+        def,
+        schema,
+        names,
+        krate,
+        vis,
+        builder,
+    } = cx;
     let len = field.array_len.map(usize::from);
     if is_padding_name(&field.name) {
         // Padding is bytes whatever its declared type: its size is what counts.
-        let size = match &field.ty {
-            TypeRef::Primitive(p) => p.size() * len.unwrap_or(1),
-            TypeRef::Nested(_) => {
-                return Err(CodegenError::Unsupported {
-                    format: def.format.name.clone(),
-                    place: def.place.clone(),
-                    message: format!("padding field `{}` of a nested type", field.name),
-                });
-            }
+        let elem = match &field.ty {
+            TypeRef::Primitive(p) => p.size(),
+            TypeRef::Nested(n) => schema
+                .id(n)
+                .and_then(|id| schema.resolved(id))
+                .map(|l| l.size)
+                .expect("layouts are resolved before emitting"),
         };
+        let size = elem * len.unwrap_or(1);
         let ident = format_ident!("{}", unique(field.name.clone(), taken));
         let size = proc_macro2::Literal::usize_unsuffixed(size);
         *underscore = true;
@@ -281,23 +430,15 @@ fn one_field(
         });
     }
     let element: TokenStream = match &field.ty {
-        TypeRef::Primitive(Primitive::Char) => {
-            let Some(n) = len else {
-                return Err(CodegenError::Unsupported {
-                    format: def.format.name.clone(),
-                    place: def.place.clone(),
-                    message: format!(
-                        "field `{}` is a single `char`; only `char[N]` arrays (text) are supported",
-                        field.name
-                    ),
-                });
-            };
-            let n = proc_macro2::Literal::usize_unsuffixed(n);
-            let chars = quote!(#krate::Chars<#n>);
-            return Ok(field_tokens(def, field, chars, vis, taken));
-        }
+        TypeRef::Primitive(Primitive::Char) => match len {
+            Some(n) => {
+                let n = proc_macro2::Literal::usize_unsuffixed(n);
+                return Ok(field_tokens(cx, field, quote!(#krate::Chars<#n>), taken));
+            }
+            None => quote!(#krate::Char),
+        },
         TypeRef::Primitive(p) => {
-            if *p == Primitive::Bool && len.is_none() {
+            if *p == Primitive::Bool && len.is_none() && !def.optional.contains(&field.name) {
                 *bools += 1;
             }
             let ty = format_ident!("{}", rust_primitive(*p));
@@ -320,21 +461,21 @@ fn one_field(
         }
         None => element,
     };
-    Ok(field_tokens(def, field, ty, vis, taken))
+    Ok(field_tokens(cx, field, ty, taken))
 }
 
 fn field_tokens(
-    def: &Definition,
+    cx: &FieldContext<'_>,
     field: &Field,
     ty: TokenStream,
-    vis: &syn::Visibility,
     taken: &mut HashSet<String>,
 ) -> TokenStream {
+    let (def, vis) = (cx.def, cx.vis);
     let rust = unique(field_name(&field.name), taken);
     let ident = format_ident!("{rust}");
     let mut doc = Vec::new();
     if let Some(text) = def.field_docs.get(&field.name) {
-        doc.extend(text.lines().map(str::to_owned));
+        doc.extend(doc_text(text, def.plain_docs));
         doc.push(String::new());
     }
     doc.push(format!("`{field}`"));
@@ -343,11 +484,59 @@ fn field_tokens(
         let name = &field.name;
         quote!(#[ulog(rename = #name)])
     });
+    let widen = def
+        .widen
+        .contains(&field.name)
+        .then(|| quote!(#[ulog(widen)]));
+    let ty = if def.optional.contains(&field.name) {
+        quote!(::core::option::Option<#ty>)
+    } else {
+        ty
+    };
     quote! {
         #(#[doc = #doc])*
         #rename
+        #widen
         #vis #ident: #ty,
     }
+}
+
+/// The lines of a doc text; plain text from a file (`.msg` comments, merge notes) is
+/// escaped so that rustdoc shows it as written: brackets and angle brackets are not links
+/// or HTML, bare URLs are links.
+fn doc_text(text: &str, plain: bool) -> Vec<String> {
+    text.lines()
+        .map(|line| {
+            if !plain {
+                return line.to_owned();
+            }
+            let mut out = String::with_capacity(line.len());
+            for word in line.split_inclusive(' ') {
+                let (w, space) = match word.strip_suffix(' ') {
+                    Some(w) => (w, " "),
+                    None => (word, ""),
+                };
+                if w.starts_with("http://") || w.starts_with("https://") {
+                    out.push('<');
+                    out.push_str(w);
+                    out.push('>');
+                } else {
+                    for c in w.chars() {
+                        if matches!(c, '[' | ']' | '<' | '>' | '*' | '\\') {
+                            out.push('\\');
+                        }
+                        out.push(c);
+                    }
+                }
+                out.push_str(space);
+            }
+            // Not a heading, list item or quote.
+            if out.starts_with(['#', '-', '+', '>', '=']) {
+                out.insert(0, '\\');
+            }
+            out
+        })
+        .collect()
 }
 
 /// Doc lines as `///` comments print them: a space after the slashes.

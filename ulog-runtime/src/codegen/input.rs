@@ -1,7 +1,7 @@
-//! The inputs of the generator: TOML topic files, format strings and logs, read into one list
-//! of definitions that remember where each came from.
+//! The inputs of the generator: TOML topic files, format strings, logs and `.msg` files,
+//! read into one list of definitions that remember where each came from.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -24,12 +24,32 @@ pub enum Place {
     FormatString(usize),
     /// The `F` messages of a log.
     Log(PathBuf),
+    /// A PX4 `.msg` file, at a line (1-based).
+    Msg {
+        /// The file.
+        path: PathBuf,
+        /// The line.
+        line: usize,
+    },
+}
+
+impl Place {
+    /// The place for a doc comment: a file without its line for `.msg` files (the whole
+    /// file is the definition), as [`Display`](fmt::Display) otherwise.
+    pub(crate) fn doc_text(&self) -> String {
+        match self {
+            Place::Msg { path, .. } => path.display().to_string(),
+            other => other.to_string(),
+        }
+    }
 }
 
 impl fmt::Display for Place {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Place::Toml { path, line } => write!(f, "{}:{line}", path.display()),
+            Place::Toml { path, line } | Place::Msg { path, line } => {
+                write!(f, "{}:{line}", path.display())
+            }
             Place::FormatString(n) => write!(f, "format string #{n}"),
             Place::Log(path) => write!(f, "{}", path.display()),
         }
@@ -45,10 +65,24 @@ pub(crate) struct Definition {
     pub(crate) field_docs: HashMap<String, String>,
     pub(crate) derives: Vec<String>,
     pub(crate) exact: bool,
+    /// Topic names beyond the format's own (PX4's `# TOPICS`), in order.
+    pub(crate) topics: Vec<String>,
+    /// Constants of a `.msg` file.
+    pub(crate) constants: Vec<crate::codegen::msg::Constant>,
+    /// The Rust type name an input asks for (a `.msg` file's name).
+    pub(crate) rust_name: Option<String>,
+    /// Fields a merged type may lack (`Option`).
+    pub(crate) optional: HashSet<String>,
+    /// Fields that widen (`#[ulog(widen)]`).
+    pub(crate) widen: HashSet<String>,
+    /// Docs that are plain text from a file (`.msg` comments), escaped for rustdoc.
+    pub(crate) plain_docs: bool,
+    /// How many differing definitions were merged into this one (0: none).
+    pub(crate) merged: usize,
 }
 
 impl Definition {
-    fn plain(format: Format, place: Place) -> Definition {
+    pub(crate) fn plain(format: Format, place: Place) -> Definition {
         Definition {
             format,
             place,
@@ -56,6 +90,13 @@ impl Definition {
             field_docs: HashMap::new(),
             derives: Vec::new(),
             exact: false,
+            topics: Vec::new(),
+            constants: Vec::new(),
+            rust_name: None,
+            optional: HashSet::new(),
+            widen: HashSet::new(),
+            plain_docs: false,
+            merged: 0,
         }
     }
 }
@@ -168,12 +209,11 @@ pub(crate) fn parse_toml(path: &Path, text: &str) -> Result<Vec<Definition>, Cod
             message: format!("`{spec}` is not a valid format: {error}"),
         })?;
         out.push(Definition {
-            format,
-            place,
             doc: topic.doc,
             field_docs,
             derives: topic.derives,
             exact: topic.exact,
+            ..Definition::plain(format, place)
         });
     }
     Ok(out)
@@ -239,4 +279,43 @@ pub(crate) fn read_log(
         .filter(|f| wanted.iter().any(|w| w.name == f.name))
         .map(|f| Definition::plain(f.clone(), place.clone()))
         .collect())
+}
+
+/// Definitions from laid-out `.msg` files: the files selected by `topics` (all of them when
+/// `None`) and every file they nest, in the set's order.
+pub(crate) fn msg_definitions(
+    set: &crate::codegen::msg::MsgSet,
+    selected: &[usize],
+) -> Vec<Definition> {
+    selected
+        .iter()
+        .map(|&i| {
+            let file = &set.files()[i];
+            let format = set.formats()[i].clone();
+            let own = format.name.clone();
+            let field_docs = file
+                .fields
+                .iter()
+                .filter_map(|f| f.doc.clone().map(|d| (f.name.clone(), d)))
+                .collect();
+            let line = file.fields.first().map_or(1, |f| f.line);
+            let valid_ident = file.type_name.starts_with(|c: char| c.is_ascii_uppercase())
+                && file.type_name.chars().all(|c| c.is_ascii_alphanumeric());
+            Definition {
+                doc: file.doc.clone(),
+                field_docs,
+                topics: set.topics(i).into_iter().filter(|t| *t != own).collect(),
+                constants: file.constants.clone(),
+                rust_name: valid_ident.then(|| file.type_name.clone()),
+                plain_docs: true,
+                ..Definition::plain(
+                    format,
+                    Place::Msg {
+                        path: file.path.clone(),
+                        line,
+                    },
+                )
+            }
+        })
+        .collect()
 }

@@ -65,11 +65,14 @@
 
 mod emit;
 mod input;
+mod merge;
+pub mod msg;
 
 use std::path::{Path, PathBuf};
 
 use input::Definition;
 pub use input::Place;
+pub use merge::Merge;
 
 use crate::schema::{LayoutError, Schema};
 
@@ -104,6 +107,35 @@ pub enum CodegenError {
         place: Place,
         /// What is wrong.
         message: String,
+    },
+    /// A `.msg` line that does not follow the grammar.
+    #[error("{}:{line}: {message}", path.display())]
+    Msg {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// A topic asked for that no `.msg` file of a folder defines.
+    #[error("{}: no .msg file defines topic `{topic}`", dir.display())]
+    TopicNotInMsg {
+        /// The folder.
+        dir: PathBuf,
+        /// The topic.
+        topic: String,
+    },
+    /// Merging strictly ([`Merge::Strict`]): a field whose types across the inputs have no
+    /// lossless common type.
+    #[error("`{format}`: field `{field}` has no type that holds every value of its types: {usage}")]
+    Incompatible {
+        /// The format.
+        format: String,
+        /// The field.
+        field: String,
+        /// Which inputs have which type.
+        usage: String,
     },
     /// A log that cannot be read.
     #[error("{}: {error}", path.display())]
@@ -188,8 +220,10 @@ pub struct GeneratedType {
     /// The Rust path within the generated file: `EscStatus`, or `esc_status::EscStatus`
     /// with a module per topic.
     pub path: String,
-    /// Whether it has a `timestamp` (implements `Topic`).
+    /// Whether it has an unsigned integer `timestamp` (implements `Topic`).
     pub topic: bool,
+    /// Every topic name it stands for, `format` first (PX4's `# TOPICS`).
+    pub topics: Vec<String>,
 }
 
 #[derive(Debug, Clone)]
@@ -198,6 +232,11 @@ enum Input {
     Format(String),
     Log {
         path: PathBuf,
+        topics: Option<Vec<String>>,
+    },
+    Msg(PathBuf),
+    MsgDir {
+        dir: PathBuf,
         topics: Option<Vec<String>>,
     },
 }
@@ -210,6 +249,8 @@ pub struct Builder {
     visibility: String,
     module_per_topic: bool,
     runtime_crate: String,
+    merge: Merge,
+    exact: bool,
 }
 
 impl Default for Builder {
@@ -228,6 +269,8 @@ impl Builder {
             visibility: "pub".to_owned(),
             module_per_topic: false,
             runtime_crate: "::ulog_runtime".to_owned(),
+            merge: Merge::Never,
+            exact: false,
         }
     }
 
@@ -261,6 +304,47 @@ impl Builder {
         self
     }
 
+    /// Adds one PX4 `.msg` file; the messages it nests must come from another input.
+    pub fn msg(&mut self, path: impl AsRef<Path>) -> &mut Builder {
+        self.inputs.push(Input::Msg(path.as_ref().to_owned()));
+        self
+    }
+
+    /// Adds every `.msg` file of a folder (PX4-Autopilot's or px4_msgs' `msg/`): one type
+    /// per file, laid out as PX4 logs it (see [`msg`]).
+    pub fn msg_dir(&mut self, dir: impl AsRef<Path>) -> &mut Builder {
+        self.inputs.push(Input::MsgDir {
+            dir: dir.as_ref().to_owned(),
+            topics: None,
+        });
+        self
+    }
+
+    /// Adds the `.msg` files of a folder that define these topics (a `# TOPICS` name or a
+    /// file's snake-case name), and the files they nest.
+    pub fn msg_dir_topics(&mut self, dir: impl AsRef<Path>, topics: &[&str]) -> &mut Builder {
+        self.inputs.push(Input::MsgDir {
+            dir: dir.as_ref().to_owned(),
+            topics: Some(topics.iter().map(|t| (*t).to_owned()).collect()),
+        });
+        self
+    }
+
+    /// What to do with a name that inputs define differently (default [`Merge::Never`]: an
+    /// error). [`Merge::Lossless`] makes one type that reads every definition: e.g. the
+    /// logs of a fleet of PX4 versions.
+    pub fn merge(&mut self, merge: Merge) -> &mut Builder {
+        self.merge = merge;
+        self
+    }
+
+    /// Marks every type `#[ulog(exact)]`: reading requires the file's format to be
+    /// identical (default `false`). Not with differing definitions merged.
+    pub fn exact(&mut self, exact: bool) -> &mut Builder {
+        self.exact = exact;
+        self
+    }
+
     /// Adds a derive to every type, e.g. `serde::Serialize` or `Copy`.
     pub fn derive(&mut self, path: &str) -> &mut Builder {
         self.derives.push(path.to_owned());
@@ -288,15 +372,16 @@ impl Builder {
 
     /// The generated file's content.
     pub fn render(&self) -> Result<String, CodegenError> {
-        let definitions = self.resolve()?;
-        emit::render(self, &definitions, &self.input_names())
+        let resolved = self.resolve()?;
+        emit::render(self, &resolved, &self.input_names())
     }
 
     /// The types the generated file defines, in its order.
     pub fn types(&self) -> Result<Vec<GeneratedType>, CodegenError> {
-        let definitions = self.resolve()?;
-        let names = emit::names(&definitions);
-        Ok(definitions
+        let resolved = self.resolve()?;
+        let names = emit::names(&resolved.defs);
+        Ok(resolved
+            .defs
             .iter()
             .map(|d| {
                 let name = &d.format.name;
@@ -308,11 +393,10 @@ impl Builder {
                     } else {
                         ty.clone()
                     },
-                    topic: d.format.fields.iter().any(|f| {
-                        f.name == "timestamp"
-                            && f.array_len.is_none()
-                            && matches!(f.ty, crate::schema::TypeRef::Primitive(p) if p.is_unsigned_integer())
-                    }),
+                    topic: emit::is_topic(&d.format),
+                    topics: std::iter::once(name.clone())
+                        .chain(d.topics.iter().cloned())
+                        .collect(),
                 }
             })
             .collect())
@@ -324,8 +408,15 @@ impl Builder {
     pub fn generate(&self, file: impl AsRef<Path>) -> Result<PathBuf, CodegenError> {
         for input in &self.inputs {
             match input {
-                Input::Toml(path) | Input::Log { path, .. } => {
+                Input::Toml(path) | Input::Log { path, .. } | Input::Msg(path) => {
                     println!("cargo:rerun-if-changed={}", path.display());
+                }
+                Input::MsgDir { dir, .. } => {
+                    // The folder itself, for files added or removed.
+                    println!("cargo:rerun-if-changed={}", dir.display());
+                    for file in msg::files_in(dir)? {
+                        println!("cargo:rerun-if-changed={}", file.display());
+                    }
                 }
                 Input::Format(_) => {}
             }
@@ -354,51 +445,158 @@ impl Builder {
         self.inputs
             .iter()
             .map(|i| match i {
-                Input::Toml(p) => p.display().to_string(),
+                Input::Toml(p) | Input::Msg(p) => p.display().to_string(),
                 Input::Format(f) => format!("`{f}`"),
                 Input::Log { path, .. } => path.display().to_string(),
+                Input::MsgDir { dir, .. } => dir.display().to_string(),
             })
             .collect()
     }
 
-    /// Every input read, merged by name, layouts resolved.
-    fn resolve(&self) -> Result<Vec<Definition>, CodegenError> {
-        let mut defs: Vec<Definition> = Vec::new();
+    /// Every input read, in input order; `.msg` files laid out last, knowing the sizes of
+    /// the other inputs' formats.
+    fn read_inputs(&self) -> Result<Vec<Definition>, CodegenError> {
+        let mut read: Vec<Vec<Definition>> = Vec::with_capacity(self.inputs.len());
+        // The `.msg` files of every input, and per input its files (indices) and topics.
+        let mut msg_files = Vec::new();
+        let mut msg_inputs: Vec<(usize, Vec<usize>, Option<(&Path, &[String])>)> = Vec::new();
         let mut format_count = 0;
-        for input in &self.inputs {
-            let read = match input {
+        for (k, input) in self.inputs.iter().enumerate() {
+            read.push(match input {
                 Input::Toml(path) => input::read_toml(path)?,
                 Input::Format(text) => {
                     format_count += 1;
                     vec![input::read_format(format_count, text)?]
                 }
                 Input::Log { path, topics } => input::read_log(path, topics.as_deref())?,
-            };
-            for def in read {
-                match defs.iter_mut().find(|d| d.format.name == def.format.name) {
-                    Some(first) if first.format != def.format => {
-                        return Err(CodegenError::Redefinition {
-                            name: def.format.name.clone(),
-                            first: first.format.to_string(),
-                            first_place: Box::new(first.place.clone()),
-                            second: def.format.to_string(),
-                            second_place: Box::new(def.place),
-                        });
-                    }
-                    // The same definition again: keep the first, with any docs the second adds.
-                    Some(first) => {
-                        if first.doc.is_none() {
-                            first.doc = def.doc;
-                        }
-                        for (k, v) in def.field_docs {
-                            first.field_docs.entry(k).or_insert(v);
-                        }
-                        first.derives.extend(def.derives);
-                        first.exact |= def.exact;
-                    }
-                    None => defs.push(def),
+                Input::Msg(path) => {
+                    msg_inputs.push((k, vec![msg_files.len()], None));
+                    msg_files.push(msg::read_file(path)?);
+                    Vec::new()
                 }
+                Input::MsgDir { dir, topics } => {
+                    let mut own = Vec::new();
+                    for path in msg::files_in(dir)? {
+                        own.push(msg_files.len());
+                        msg_files.push(msg::read_file(&path)?);
+                    }
+                    msg_inputs.push((k, own, topics.as_deref().map(|t| (dir.as_path(), t))));
+                    Vec::new()
+                }
+            });
+        }
+        if !msg_files.is_empty() {
+            // Each input's files: all, or those that define its topics and what they nest.
+            let mut chosen = vec![false; msg_files.len()];
+            let mut per_input = Vec::with_capacity(msg_inputs.len());
+            for (k, files, topics) in msg_inputs {
+                let selected = match topics {
+                    None => files,
+                    Some((dir, topics)) => select_msg(&msg_files, &files, dir, topics)?,
+                };
+                for &i in &selected {
+                    chosen[i] = true;
+                }
+                per_input.push((k, selected));
             }
+            let mut others = Schema::new();
+            for def in read.iter().flatten() {
+                let _ = others.insert(def.format.clone());
+            }
+            others.resolve_all();
+            let size = |name: &str| {
+                others
+                    .id(name)
+                    .and_then(|id| others.resolved(id))
+                    .map(|l| l.size)
+            };
+            // Only the chosen files are laid out: an unused file may nest what no input has.
+            let index: Vec<usize> = (0..msg_files.len()).filter(|&i| chosen[i]).collect();
+            let files = msg_files
+                .into_iter()
+                .enumerate()
+                .filter(|(i, _)| chosen[*i])
+                .map(|(_, f)| f)
+                .collect();
+            let set = msg::MsgSet::new(files, &size)?;
+            for (k, selected) in per_input {
+                let in_set: Vec<usize> = selected
+                    .iter()
+                    .map(|i| index.binary_search(i).expect("chosen"))
+                    .collect();
+                read[k] = input::msg_definitions(&set, &in_set);
+            }
+        }
+        Ok(read.into_iter().flatten().collect())
+    }
+
+    /// Every input read, merged by name, layouts resolved.
+    fn resolve(&self) -> Result<Resolved, CodegenError> {
+        // Group by name, in order of first appearance.
+        let mut groups: Vec<Vec<Definition>> = Vec::new();
+        for def in self.read_inputs()? {
+            match groups
+                .iter_mut()
+                .find(|g| g[0].format.name == def.format.name)
+            {
+                Some(group) => group.push(def),
+                None => groups.push(vec![def]),
+            }
+        }
+        let mut defs = Vec::with_capacity(groups.len());
+        for group in groups {
+            let differing = group.iter().any(|d| d.format != group[0].format);
+            if !differing {
+                // The same definition again: keep the first, with any docs the others add.
+                let mut rest = group.into_iter();
+                let mut first = rest.next().expect("a group has a definition");
+                for def in rest {
+                    if first.doc.is_none() {
+                        first.doc = def.doc;
+                    }
+                    for (k, v) in def.field_docs {
+                        first.field_docs.entry(k).or_insert(v);
+                    }
+                    first.derives.extend(def.derives);
+                    first.exact |= def.exact;
+                    for t in def.topics {
+                        if !first.topics.contains(&t) {
+                            first.topics.push(t);
+                        }
+                    }
+                    if first.constants.is_empty() {
+                        first.constants = def.constants;
+                    }
+                }
+                first.exact |= self.exact;
+                defs.push(first);
+                continue;
+            }
+            if self.merge == Merge::Never {
+                let second = group
+                    .iter()
+                    .find(|d| d.format != group[0].format)
+                    .expect("differing");
+                return Err(CodegenError::Redefinition {
+                    name: second.format.name.clone(),
+                    first: group[0].format.to_string(),
+                    first_place: Box::new(group[0].place.clone()),
+                    second: second.format.to_string(),
+                    second_place: Box::new(second.place.clone()),
+                });
+            }
+            if self.exact {
+                return Err(CodegenError::InvalidOption {
+                    what: "exact",
+                    value: "true".to_owned(),
+                    message: format!(
+                        "`{}` is defined differently by several inputs, and a merged type \
+                         cannot be exact",
+                        group[0].format.name
+                    ),
+                });
+            }
+            defs.push(merge::merge(group, self.merge)?);
         }
         let mut schema = Schema::new();
         for def in &defs {
@@ -440,8 +638,54 @@ impl Builder {
                 },
             });
         }
-        Ok(defs)
+        Ok(Resolved { defs, schema })
     }
+}
+
+/// The definitions to generate, and their formats with layouts resolved.
+pub(crate) struct Resolved {
+    pub(crate) defs: Vec<Definition>,
+    pub(crate) schema: Schema,
+}
+
+/// The files of `files` (indices into `all`) that define one of `topics` (a `# TOPICS`
+/// name or the snake-case name), and the files they nest, in file order.
+fn select_msg(
+    all: &[msg::MsgFile],
+    files: &[usize],
+    dir: &Path,
+    topics: &[String],
+) -> Result<Vec<usize>, CodegenError> {
+    let defines = |i: usize, topic: &str| {
+        let f = &all[i];
+        f.topics.iter().any(|t| t == topic) || msg::snake_case(&f.type_name) == topic
+    };
+    let mut wanted = Vec::new();
+    for topic in topics {
+        let i = files
+            .iter()
+            .copied()
+            .find(|&i| defines(i, topic))
+            .ok_or_else(|| CodegenError::TopicNotInMsg {
+                dir: dir.to_owned(),
+                topic: topic.clone(),
+            })?;
+        wanted.push(i);
+    }
+    let mut selected = vec![false; all.len()];
+    while let Some(i) = wanted.pop() {
+        if std::mem::replace(&mut selected[i], true) {
+            continue;
+        }
+        for field in &all[i].fields {
+            if let msg::MsgType::Nested(name) = &field.ty
+                && let Some(dep) = all.iter().position(|f| f.type_name == *name)
+            {
+                wanted.push(dep);
+            }
+        }
+    }
+    Ok((0..all.len()).filter(|&i| selected[i]).collect())
 }
 
 /// The common case in one call: types for every topic of a TOML file, written to `file` in

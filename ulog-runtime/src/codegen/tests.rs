@@ -107,8 +107,23 @@ fn resolution_errors_name_every_place() {
             .render()
             .is_ok()
     );
-    let err = Builder::new().format("a:char c;").render().unwrap_err();
-    assert!(err.to_string().contains("single `char`"), "{err}");
+    // A single `char` is a `Char` field.
+    let code = Builder::new().format("a:char c;").render().unwrap();
+    assert!(code.contains("pub c: ::ulog_runtime::Char,"), "{code}");
+    // Nested padding is bytes of the nested type's size; a timestamp that is not an
+    // unsigned integer makes a nested-only type.
+    let code = Builder::new()
+        .format("n:uint8_t a;uint8_t[3] _padding0;float b;")
+        .format("t:uint64_t timestamp;n _padding0;n[2] _padding1;")
+        .format("odd:float timestamp;")
+        .render()
+        .unwrap();
+    assert!(code.contains("pub _padding0: [u8; 8],"), "{code}");
+    assert!(code.contains("pub _padding1: [u8; 16],"), "{code}");
+    assert!(
+        code.contains("#[ulog(name = \"odd\", nested, crate"),
+        "{code}"
+    );
     let err = Builder::new()
         .format("a:float x;")
         .derive("not a path")
@@ -157,4 +172,161 @@ fn the_output_is_rewritten_only_when_it_changes() {
     b.generate(&path).unwrap();
     assert_ne!(std::fs::read_to_string(&path).unwrap(), first);
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A folder of `.msg` files, written for one test.
+fn msg_folder(name: &str, files: &[(&str, &str)]) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("ulog-msg-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    for (file, text) in files {
+        std::fs::write(dir.join(file), text).unwrap();
+    }
+    dir
+}
+
+#[test]
+fn msg_errors_name_the_file_and_line() {
+    let cases: &[(&[(&str, &str)], &str)] = &[
+        (
+            &[("A.msg", "uint64 timestamp\nfloat32[x] q\n")],
+            "A.msg:2: bad array length in `float32[x]`: `x` is not a number",
+        ),
+        (
+            &[("A.msg", "uint64 timestamp\n\nuint8 a\nuint16 a\n")],
+            "A.msg:4: field `a` is defined twice",
+        ),
+        (
+            &[("A.msg", "uint8 LIMIT = 300\nuint64 timestamp\n")],
+            "A.msg:1: constant `LIMIT`: `300` does not fit uint8 (0..=255)",
+        ),
+        (
+            &[("A.msg", "uint64 timestamp\nstring name\n")],
+            "A.msg:2: unknown type `string`",
+        ),
+        (
+            &[("A.msg", "uint64 timestamp\nMissing m # no such file\n")],
+            "`a` (A.msg:2): field `m` has type `Missing`, which no input defines",
+        ),
+    ];
+    for (i, (files, expected)) in cases.iter().enumerate() {
+        let dir = msg_folder(&format!("err{i}"), files);
+        let err = Builder::new()
+            .msg_dir(&dir)
+            .render()
+            .unwrap_err()
+            .to_string();
+        let err = err.replace(&format!("{}/", dir.display()), "");
+        assert!(err.contains(expected), "{err}\nwanted: {expected}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+    // A cycle between files names each file and line.
+    let dir = msg_folder(
+        "cycle",
+        &[
+            ("A.msg", "uint64 timestamp\nB b\n"),
+            ("B.msg", "uint8 x\nC c\n"),
+            ("C.msg", "uint8 y\n\nA a\n"),
+        ],
+    );
+    let err = Builder::new()
+        .msg_dir(&dir)
+        .render()
+        .unwrap_err()
+        .to_string();
+    let err = err.replace(&format!("{}/", dir.display()), "");
+    assert_eq!(
+        err,
+        "nested types form a cycle: `a` (A.msg:2) -> `b` (B.msg:2) -> `c` (C.msg:3)"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn msg_folders_resolve_across_inputs_and_select_topics() {
+    let dir = msg_folder(
+        "select",
+        &[
+            (
+                "Attitude.msg",
+                "uint64 timestamp\nfloat32[4] q\n# TOPICS attitude estimator_attitude\n",
+            ),
+            (
+                "Status.msg",
+                "uint64 timestamp\nReport[2] reports\nExternal e\n",
+            ),
+            ("Report.msg", "uint32 rpm\n"),
+            ("Unused.msg", "uint64 timestamp\n"),
+        ],
+    );
+    // A nested type from another input (a format string), used by the folder.
+    let types = Builder::new()
+        .msg_dir_topics(&dir, &["estimator_attitude", "status"])
+        .format("external:uint16_t v;")
+        .types()
+        .unwrap();
+    let names: Vec<(&str, &str, Vec<&str>)> = types
+        .iter()
+        .map(|t| {
+            (
+                t.format.as_str(),
+                t.path.as_str(),
+                t.topics.iter().map(String::as_str).collect(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        names,
+        [
+            (
+                "attitude",
+                "Attitude",
+                vec!["attitude", "estimator_attitude"]
+            ),
+            ("report", "Report", vec!["report"]),
+            ("status", "Status", vec!["status"]),
+            ("external", "External", vec!["external"]),
+        ]
+    );
+    let err = Builder::new()
+        .msg_dir_topics(&dir, &["nothing"])
+        .render()
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.ends_with("no .msg file defines topic `nothing`"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn merging_strictly_refuses_fields_without_a_common_type() {
+    let mut b = Builder::new();
+    b.format("t:uint64_t timestamp;int64_t x;")
+        .format("t:uint64_t timestamp;uint64_t x;");
+    assert!(matches!(
+        b.render().unwrap_err(),
+        CodegenError::Redefinition { .. }
+    ));
+    b.merge(Merge::Strict);
+    assert_eq!(
+        b.render().unwrap_err().to_string(),
+        "`t`: field `x` has no type that holds every value of its types: `int64_t` in format \
+         string #1; `uint64_t` in format string #2"
+    );
+    b.merge(Merge::Lossless);
+    let code = b.render().unwrap();
+    assert!(
+        code.contains("Left out (no Rust type holds every value of its types): `x`"),
+        "{code}"
+    );
+    assert!(!code.contains("pub x:"), "{code}");
+    b.exact(true);
+    assert!(
+        b.render()
+            .unwrap_err()
+            .to_string()
+            .contains("cannot be exact")
+    );
 }

@@ -110,7 +110,7 @@ impl DecodePlan {
         let id = schema.id(topic).ok_or_else(|| TypedError::NoSuchTopic {
             topic: topic.to_owned(),
             rust_type: format.rust_type,
-            suggestions: closest_names(topic, schema.formats().iter().map(|f| f.name.as_str())),
+            suggestions: schema.suggest(topic),
         })?;
         let resolved;
         let schema = if schema.resolved(id).is_some() {
@@ -447,47 +447,6 @@ fn did_you_mean(suggestions: &[String]) -> String {
             format!("; did you mean {} or {last}?", rest.join(", "))
         }
     }
-}
-
-/// The names closest to `name` by edit distance (and those containing it), at most 3: the
-/// suggestions of an error about a name that does not exist.
-pub(crate) fn closest_names<'a>(
-    name: &str,
-    candidates: impl Iterator<Item = &'a str>,
-) -> Vec<String> {
-    let limit = (name.chars().count() / 3).max(2);
-    let mut scored: Vec<(usize, &str)> = candidates
-        .filter_map(|c| {
-            let d = edit_distance(name, c);
-            let contains = c.contains(name) || name.contains(c);
-            (d <= limit || contains && !c.is_empty()).then_some((d, c))
-        })
-        .collect();
-    scored.sort();
-    scored.dedup();
-    scored
-        .into_iter()
-        .take(3)
-        .map(|(_, c)| c.to_owned())
-        .collect()
-}
-
-/// Levenshtein distance over characters.
-fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut diag = row[0];
-        row[0] = i + 1;
-        for (j, &cb) in b.iter().enumerate() {
-            let next = (diag + usize::from(ca != cb))
-                .min(row[j] + 1)
-                .min(row[j + 1] + 1);
-            diag = row[j + 1];
-            row[j + 1] = next;
-        }
-    }
-    row[b.len()]
 }
 
 /// A checked decoder of one topic's rows: made once against a file's formats, then decoding

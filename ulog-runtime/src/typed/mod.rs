@@ -97,7 +97,6 @@ pub(crate) mod field;
 mod view;
 mod widen;
 
-pub(crate) use check::closest_names;
 pub use check::{DecodePlan, FieldPlan, Mismatch, MismatchKind, TypedDecoder, TypedError};
 pub use field::{Char, Chars, Element, FieldValue, Padding};
 pub use view::{TopicRows, TypedRows, TypedTopic};

@@ -1,4 +1,4 @@
-//! `ulog csv` (files as pyulog's `ulog2csv` writes them) and `ulog json`.
+//! `ulog csv`: one file per topic instance, as pyulog's `ulog2csv` writes them.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -10,12 +10,56 @@ use ulog_runtime::{Log, Scalar};
 use crate::number::{f32_text, f64_text};
 use crate::{Failure, Progress};
 
-pub(crate) struct Options {
-    pub(crate) topics: Vec<String>,
-    pub(crate) output: Option<PathBuf>,
-    pub(crate) delimiter: String,
-    pub(crate) start_us: Option<f64>,
-    pub(crate) end_us: Option<f64>,
+/// `ulog csv FILE [-m a,b] [-o DIR] [-d ;] [--start S --end S]`.
+#[derive(clap::Args)]
+pub(crate) struct Args {
+    /// The log.
+    file: PathBuf,
+    /// Only these topics (comma-separated).
+    #[arg(short, long, value_delimiter = ',')]
+    messages: Vec<String>,
+    /// Output directory (default: beside the log).
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// Field separator.
+    #[arg(short, long, default_value = ",")]
+    delimiter: String,
+    /// Only rows from this time on, in seconds (pyulog's `-ts`, `--time_s`).
+    #[arg(long, alias = "time_s")]
+    start: Option<f64>,
+    /// Only rows before this time, in seconds (pyulog's `-te`, `--time_e`).
+    #[arg(long, alias = "time_e")]
+    end: Option<f64>,
+}
+
+pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
+    let log = crate::open(&args.file)?;
+    crate::check_topics(&log, &args.file, &args.messages)?;
+    let options = Options {
+        topics: args.messages.clone(),
+        output: args.output.clone(),
+        delimiter: args.delimiter.clone(),
+        start_us: args.start.map(|s| s * 1e6),
+        end_us: args.end.map(|s| s * 1e6),
+    };
+    let mut progress = Progress::new(log.row_count(), log.bytes().len());
+    let written = write_all(&log, &args.file, &options, &mut progress).map_err(|e| Failure {
+        path: e.path.or_else(|| Some(args.file.clone())),
+        ..e
+    })?;
+    for (path, rows) in written {
+        writeln!(out, "{} ({rows} rows)", path.display())?;
+    }
+    progress.done();
+    Ok(())
+}
+
+struct Options {
+    topics: Vec<String>,
+    output: Option<PathBuf>,
+    delimiter: String,
+    start_us: Option<f64>,
+    end_us: Option<f64>,
 }
 
 /// One CSV column: a number at an offset, or a `char` array as text.
@@ -128,7 +172,7 @@ fn write_text(out: &mut String, bytes: &[u8]) {
 }
 
 /// The subscriptions to export, grouped by (name, multi_id), in file order.
-fn selected<'a>(log: &'a Log<'_>, topics: &[String]) -> Vec<Vec<&'a Subscription>> {
+pub(crate) fn selected<'a>(log: &'a Log<'_>, topics: &[String]) -> Vec<Vec<&'a Subscription>> {
     let mut groups: Vec<Vec<&Subscription>> = Vec::new();
     for sub in log.subscriptions() {
         if sub.format().is_none() || (!topics.is_empty() && !topics.contains(&sub.name)) {
@@ -147,7 +191,7 @@ fn selected<'a>(log: &'a Log<'_>, topics: &[String]) -> Vec<Vec<&'a Subscription
 }
 
 /// Writes one CSV per topic instance with rows; returns the files and their row counts.
-pub(crate) fn write_all(
+fn write_all(
     log: &Log<'_>,
     file: &Path,
     options: &Options,
@@ -229,71 +273,4 @@ pub(crate) fn write_all(
         written.push((path, count));
     }
     Ok(written)
-}
-
-/// `ulog json`: JSON Lines (`{"topic", "multi_id", "timestamp", "data"}` per row, file order)
-/// or one document with the metadata and every instance's rows.
-pub(crate) fn json(
-    log: &Log<'_>,
-    topics: &[String],
-    document: bool,
-    out: &mut impl Write,
-) -> Result<(), Failure> {
-    use serde_json::{Map, Value as Json, json};
-    let wanted = |s: &Subscription| topics.is_empty() || topics.contains(&s.name);
-    if !document {
-        for row in log.data() {
-            if !wanted(row.subscription) {
-                continue;
-            }
-            let line = json!({
-                "topic": row.subscription.name,
-                "multi_id": row.subscription.multi_id,
-                "timestamp": row.timestamp,
-                "data": row.value(),
-            });
-            serde_json::to_writer(&mut *out, &line)?;
-            out.write_all(b"\n")?;
-        }
-        return Ok(());
-    }
-    let meta = log.metadata();
-    let mut info = Map::new();
-    for i in meta.info() {
-        info.insert(i.key.clone(), serde_json::to_value(&i.value)?);
-    }
-    let mut params = Map::new();
-    for p in meta.initial_parameters() {
-        params.insert(p.name.clone(), json!(p.value.as_f64()));
-    }
-    let mut instances = Vec::new();
-    for group in selected(log, topics) {
-        let rows: Vec<Json> = group
-            .iter()
-            .flat_map(|s| log.rows(s))
-            .map(|r| json!({"timestamp": r.timestamp, "data": r.value()}))
-            .collect();
-        instances.push(json!({
-            "topic": group[0].name,
-            "multi_id": group[0].multi_id,
-            "format": meta.schema().format(group[0].format().expect("selected")).to_string(),
-            "rows": rows,
-        }));
-    }
-    let doc = json!({
-        "version": log.header().version,
-        "start_timestamp": log.header().start_timestamp,
-        "info": info,
-        "parameters": params,
-        "logged_messages": log.logged_messages().iter().map(|m| json!({
-            "timestamp": m.timestamp,
-            "level": m.level().map(|l| l.name()),
-            "tag": m.tag,
-            "text": m.text,
-        })).collect::<Vec<_>>(),
-        "topics": instances,
-    });
-    serde_json::to_writer_pretty(&mut *out, &doc)?;
-    out.write_all(b"\n")?;
-    Ok(())
 }

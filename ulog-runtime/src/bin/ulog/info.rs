@@ -1,16 +1,32 @@
-//! `ulog info`, `ulog params` and `ulog messages`.
+//! `ulog info`: header, flag bits, dropouts, damage, info and multi info, and a line per
+//! topic instance.
 
 use std::io::Write;
 use std::path::Path;
 
-use ulog_runtime::read::ParamValue;
+use std::path::PathBuf;
+
 use ulog_runtime::{Log, Value};
 
 use crate::Failure;
 use crate::number::{f32_text, f64_text};
 
+/// `ulog info FILE [-v]`.
+#[derive(clap::Args)]
+pub(crate) struct Args {
+    /// The log.
+    file: PathBuf,
+    /// Also perf_* info, multi info values and every diagnostic.
+    #[arg(short, long)]
+    verbose: bool,
+}
+
+pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
+    info(&crate::open(&args.file)?, &args.file, args.verbose, out)
+}
+
 /// `h:mm:ss` of a microsecond count, as pyulog prints it.
-fn hms(us: u64) -> String {
+pub(crate) fn hms(us: u64) -> String {
     let s = us / 1_000_000;
     format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
 }
@@ -25,12 +41,7 @@ fn plain(v: &Value) -> String {
     }
 }
 
-pub(crate) fn info(
-    log: &Log<'_>,
-    file: &Path,
-    verbose: bool,
-    out: &mut impl Write,
-) -> Result<(), Failure> {
+fn info(log: &Log<'_>, file: &Path, verbose: bool, out: &mut impl Write) -> Result<(), Failure> {
     let meta = log.metadata();
     let header = log.header();
     writeln!(
@@ -169,91 +180,6 @@ pub(crate) fn info(
             sub.msg_id,
             rate,
             span
-        )?;
-    }
-    Ok(())
-}
-
-fn param_text(v: ParamValue) -> String {
-    match v {
-        ParamValue::Int32(i) => i.to_string(),
-        // pyulog holds the float32 as a Python float and prints its repr.
-        ParamValue::Float(f) => f64_text(f64::from(f)),
-    }
-}
-
-/// As pyulog's `ulog_params` (csv format): `NAME<d>initial<d>change...`, sorted by name.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn params(
-    log: &Log<'_>,
-    initial: bool,
-    changed: bool,
-    timestamps: bool,
-    delimiter: &str,
-    default: Option<&str>,
-    out: &mut impl Write,
-) -> Result<(), Failure> {
-    let meta = log.metadata();
-    let mut params: Vec<(String, ParamValue)> = match default {
-        None => meta
-            .initial_parameters()
-            .iter()
-            .map(|p| (p.name.clone(), p.value))
-            .collect(),
-        Some(kind) => {
-            let bit = if kind == "system" { 1 } else { 2 };
-            let mut defaults: Vec<(String, ParamValue)> = Vec::new();
-            for d in meta.default_parameters() {
-                if d.default_types & bit != 0 {
-                    // A later default replaces an earlier one, as in pyulog's dictionary.
-                    defaults.retain(|(n, _)| *n != d.name);
-                    defaults.push((d.name.clone(), d.value));
-                }
-            }
-            defaults
-        }
-    };
-    params.sort_by(|a, b| a.0.cmp(&b.0));
-    for (name, value) in params {
-        let changes: Vec<_> = log
-            .parameter_changes()
-            .iter()
-            .filter(|c| c.name == name)
-            .collect();
-        if changed && changes.is_empty() {
-            continue;
-        }
-        write!(out, "{name}{delimiter}{}", param_text(value))?;
-        if timestamps {
-            for c in &changes {
-                write!(out, "{delimiter}{}", param_text(c.value))?;
-            }
-            write!(out, "\ntimestamp{delimiter}0")?;
-            for c in &changes {
-                write!(out, "{delimiter}{}", c.timestamp)?;
-            }
-        } else if !initial {
-            for c in &changes {
-                write!(out, "{delimiter}{}", param_text(c.value))?;
-            }
-        }
-        writeln!(out)?;
-    }
-    Ok(())
-}
-
-/// As pyulog's `ulog_messages`: `h:mm:ss.mmm LEVEL: text`; tagged strings add `[tag N]`.
-pub(crate) fn messages(log: &Log<'_>, out: &mut impl Write) -> Result<(), Failure> {
-    for m in log.logged_messages() {
-        let ms = m.timestamp / 1000;
-        let level = m.level().map_or("UNKNOWN", |l| l.name());
-        let tag = m.tag.map(|t| format!("[tag {t}] ")).unwrap_or_default();
-        writeln!(
-            out,
-            "{}.{:03} {level}: {tag}{}",
-            hms(ms * 1000),
-            ms % 1000,
-            m.text
         )?;
     }
     Ok(())

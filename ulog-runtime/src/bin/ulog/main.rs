@@ -1,5 +1,6 @@
-//! `ulog`: inspect, export and generate from PX4 ULog files, in the spirit of pyulog's
-//! `ulog_info`, `ulog_params`, `ulog_messages` and `ulog2csv`.
+//! `ulog`: inspect, export and generate from PX4 ULog files, with pyulog's tools' options
+//! and output. One file per verb, each a thin layer over library calls; this file holds
+//! what they share: opening logs, checking topic names, errors, progress.
 
 use std::io::{self, IsTerminal, Write};
 use std::path::{Path, PathBuf};
@@ -8,9 +9,14 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 use ulog_runtime::Log;
 
+mod check_msg;
+mod codegen;
 mod csv;
 mod info;
+mod json;
+mod messages;
 mod number;
+mod params;
 
 /// Inspect, export and generate code from PX4 ULog (.ulg) flight logs.
 #[derive(Parser)]
@@ -23,84 +29,31 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Header, flag bits, info, subscriptions with rates, dropouts and damage.
-    Info {
-        /// The log.
-        file: PathBuf,
-        /// Also perf_* info, multi info values and every diagnostic.
-        #[arg(short, long)]
-        verbose: bool,
-    },
+    Info(info::Args),
     /// Parameters as pyulog's `ulog_params` writes them: `NAME,initial[,change...]`.
-    Params {
-        /// The log.
-        file: PathBuf,
-        /// Only the initial values (no changes).
-        #[arg(short, long)]
-        initial: bool,
-        /// Only the parameters that changed during the log.
-        #[arg(short, long)]
-        changed: bool,
-        /// After each parameter, a line with the change timestamps.
-        #[arg(short, long)]
-        timestamps: bool,
-        /// Separator between name and values.
-        #[arg(short = 'l', long, default_value = ",")]
-        delimiter: String,
-        /// Print default parameters instead: `system` or `current_setup`.
-        #[arg(short, long, value_parser = ["system", "current_setup"])]
-        default: Option<String>,
-    },
+    Params(params::Args),
     /// Logged and tagged strings with time and level.
-    Messages {
-        /// The log.
-        file: PathBuf,
-    },
+    Messages(messages::Args),
     /// One CSV per subscription, `<stem>_<topic>_<multi_id>.csv`, as pyulog's `ulog2csv`.
-    Csv {
-        /// The log.
-        file: PathBuf,
-        /// Only these topics (comma-separated).
-        #[arg(short, long, value_delimiter = ',')]
-        messages: Vec<String>,
-        /// Output directory (default: beside the log).
-        #[arg(short, long)]
-        output: Option<PathBuf>,
-        /// Field separator.
-        #[arg(short, long, default_value = ",")]
-        delimiter: String,
-        /// Only rows from this time on, in seconds.
-        #[arg(long)]
-        start: Option<f64>,
-        /// Only rows before this time, in seconds.
-        #[arg(long)]
-        end: Option<f64>,
-    },
+    Csv(csv::Args),
     /// Rows as JSON Lines (one object per row), or one JSON document.
-    Json {
-        /// The log.
-        file: PathBuf,
-        /// Only these topics (comma-separated).
-        #[arg(short, long, value_delimiter = ',')]
-        messages: Vec<String>,
-        /// One document with the metadata and every topic's rows.
-        #[arg(long)]
-        document: bool,
-    },
-    /// The Rust types `ulog_runtime::codegen` makes for this log's formats.
-    Codegen {
-        /// The log.
-        file: PathBuf,
-        /// Only these topics (comma-separated) and the types they nest.
-        #[arg(short, long, value_delimiter = ',')]
-        messages: Vec<String>,
-    },
+    Json(json::Args),
+    /// Rust types for a log's formats (several logs: one type per topic that reads them
+    /// all), or for a folder of PX4 `.msg` files, as `ulog_runtime::codegen` makes them.
+    Codegen(codegen::Args),
+    /// Whether the `.msg` files of a folder make exactly a log's formats, and where not.
+    CheckMsg(check_msg::Args),
 }
 
-/// An error for the one line `ulog` prints.
-struct Failure {
+/// An error for the one line `ulog` prints: `ulog: PATH: message`.
+pub(crate) struct Failure {
+    /// The file concerned, printed before the message (once).
+    path: Option<PathBuf>,
     message: String,
     /// The reader of our output went away (`ulog csv ... | head`): not an error.
     broken_pipe: bool,
+    /// The exit code (1 unless a verb says otherwise).
+    code: u8,
 }
 
 impl<E: std::fmt::Display + 'static> From<E> for Failure {
@@ -113,22 +66,45 @@ impl<E: std::fmt::Display + 'static> From<E> for Failure {
                 .and_then(serde_json::Error::io_error_kind),
         };
         Failure {
+            path: None,
             message: e.to_string(),
             broken_pipe: kind == Some(io::ErrorKind::BrokenPipe),
+            code: 1,
         }
     }
 }
 
+impl Failure {
+    /// A failure about one file.
+    pub(crate) fn at(path: &Path, message: impl std::fmt::Display) -> Failure {
+        Failure {
+            path: Some(path.to_owned()),
+            ..Failure::from(message.to_string())
+        }
+    }
+
+    /// A failure that is not about one file, with an exit code.
+    pub(crate) fn exit(code: u8, message: impl std::fmt::Display) -> Failure {
+        Failure {
+            code,
+            ..Failure::from(message.to_string())
+        }
+    }
+}
+
+/// pyulog's spellings of options that clap cannot take as they are: `-ts`/`-te` (ulog2csv's
+/// time window) become `--start`/`--end`.
+fn pyulog_aliases(args: impl Iterator<Item = std::ffi::OsString>) -> Vec<std::ffi::OsString> {
+    args.map(|a| match a.to_str() {
+        Some("-ts") => "--start".into(),
+        Some("-te") => "--end".into(),
+        _ => a,
+    })
+    .collect()
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
-    let file = match &cli.command {
-        Command::Info { file, .. }
-        | Command::Params { file, .. }
-        | Command::Messages { file }
-        | Command::Csv { file, .. }
-        | Command::Json { file, .. }
-        | Command::Codegen { file, .. } => file.clone(),
-    };
+    let cli = Cli::parse_from(pyulog_aliases(std::env::args_os()));
     let stdout = io::stdout();
     let mut out = io::BufWriter::new(stdout.lock());
     let result = run(cli.command, &mut out).and_then(|()| out.flush().map_err(Failure::from));
@@ -137,82 +113,82 @@ fn main() -> ExitCode {
         Err(Failure {
             broken_pipe: true, ..
         }) => ExitCode::SUCCESS,
-        Err(Failure { message, .. }) => {
-            eprintln!("ulog: {}: {message}", file.display());
-            ExitCode::FAILURE
+        Err(Failure {
+            path,
+            message,
+            code,
+            ..
+        }) => {
+            match path {
+                Some(path) => eprintln!("ulog: {}: {message}", path.display()),
+                None => eprintln!("ulog: {message}"),
+            }
+            ExitCode::from(code)
         }
     }
-}
-
-fn open(file: &Path) -> Result<Log<'static>, Failure> {
-    Ok(Log::open(file)?)
 }
 
 fn run(command: Command, out: &mut impl Write) -> Result<(), Failure> {
     match command {
-        Command::Info { file, verbose } => info::info(&open(&file)?, &file, verbose, out),
-        Command::Params {
-            file,
-            initial,
-            changed,
-            timestamps,
-            delimiter,
-            default,
-        } => info::params(
-            &open(&file)?,
-            initial,
-            changed,
-            timestamps,
-            &delimiter,
-            default.as_deref(),
-            out,
-        ),
-        Command::Messages { file } => info::messages(&open(&file)?, out),
-        Command::Csv {
-            file,
-            messages,
-            output,
-            delimiter,
-            start,
-            end,
-        } => {
-            let log = open(&file)?;
-            let options = csv::Options {
-                topics: messages,
-                output,
-                delimiter,
-                start_us: start.map(|s| s * 1e6),
-                end_us: end.map(|s| s * 1e6),
+        Command::Info(args) => info::run(&args, out),
+        Command::Params(args) => params::run(&args, out),
+        Command::Messages(args) => messages::run(&args, out),
+        Command::Csv(args) => csv::run(&args, out),
+        Command::Json(args) => json::run(&args, out),
+        Command::Codegen(args) => codegen::run(&args, out),
+        Command::CheckMsg(args) => check_msg::run(&args, out),
+    }
+}
+
+/// Opens a log, with plain messages for paths that are not readable files.
+pub(crate) fn open(path: &Path) -> Result<Log<'static>, Failure> {
+    let plain = |e: &io::Error| match e.kind() {
+        io::ErrorKind::NotFound => "no such file".to_owned(),
+        io::ErrorKind::PermissionDenied => "permission denied".to_owned(),
+        _ => e.to_string(),
+    };
+    match std::fs::metadata(path) {
+        Err(e) => return Err(Failure::at(path, plain(&e))),
+        Ok(m) if m.is_dir() => return Err(Failure::at(path, "is a folder, not a log file")),
+        Ok(m) if !m.is_file() => return Err(Failure::at(path, "is not a regular file")),
+        Ok(_) => {}
+    }
+    Log::open(path).map_err(|e| match e {
+        ulog_runtime::ReadError::Io(io) => Failure::at(path, plain(&io)),
+        other => Failure::at(path, other),
+    })
+}
+
+/// Checks that every topic of a `-m` list is one the log defines; the error names the
+/// closest it has.
+pub(crate) fn check_topics(log: &Log<'_>, path: &Path, topics: &[String]) -> Result<(), Failure> {
+    let schema = log.metadata().schema();
+    for topic in topics {
+        if schema.get(topic).is_none() {
+            let suggestion = schema.suggest(topic);
+            let hint = match suggestion.as_slice() {
+                [] => String::new(),
+                names => format!(
+                    "; did you mean {}?",
+                    names
+                        .iter()
+                        .map(|n| format!("`{n}`"))
+                        .collect::<Vec<_>>()
+                        .join(" or ")
+                ),
             };
-            let mut progress = Progress::new(log.row_count(), log.bytes().len());
-            for (path, rows) in csv::write_all(&log, &file, &options, &mut progress)? {
-                writeln!(out, "{} ({rows} rows)", path.display())?;
-            }
-            progress.done();
-            Ok(())
-        }
-        Command::Json {
-            file,
-            messages,
-            document,
-        } => csv::json(&open(&file)?, &messages, document, out),
-        Command::Codegen { file, messages } => {
-            let mut builder = ulog_runtime::codegen::Builder::new();
-            if messages.is_empty() {
-                builder.ulog(&file);
-            } else {
-                let topics: Vec<&str> = messages.iter().map(String::as_str).collect();
-                builder.ulog_topics(&file, &topics);
-            }
-            out.write_all(builder.render()?.as_bytes())?;
-            Ok(())
+            return Err(Failure::at(
+                path,
+                format!("no topic `{topic}` in this log{hint}"),
+            ));
         }
     }
+    Ok(())
 }
 
 /// A percentage on stderr while long exports run, only when stderr is a terminal and the
 /// file is large.
-struct Progress {
+pub(crate) struct Progress {
     total: usize,
     done: usize,
     shown: usize,
@@ -220,7 +196,7 @@ struct Progress {
 }
 
 impl Progress {
-    fn new(total: usize, file_size: usize) -> Progress {
+    pub(crate) fn new(total: usize, file_size: usize) -> Progress {
         Progress {
             total: total.max(1),
             done: 0,
@@ -229,7 +205,7 @@ impl Progress {
         }
     }
 
-    fn add(&mut self, rows: usize) {
+    pub(crate) fn add(&mut self, rows: usize) {
         self.done += rows;
         let pct = self.done * 100 / self.total;
         if self.active && pct != self.shown {
@@ -238,7 +214,7 @@ impl Progress {
         }
     }
 
-    fn done(&self) {
+    pub(crate) fn done(&self) {
         if self.active {
             eprintln!();
         }
