@@ -1,5 +1,6 @@
-//! Quickstart: write a small flight log from typed topics, then read it back three ways:
-//! typed, dynamic, and streaming. No input file needed.
+//! Quickstart: write a small flight log from typed topics (to `quickstart.ulg` in the
+//! system's temporary folder, path printed), then read it back three ways: typed, dynamic,
+//! and streaming. No input file needed.
 //!
 //! The topic types come from two places: `BatteryStatus` (with a nested `BatteryCell`) and
 //! `VehicleAttitude` are generated at build time from `examples/topics.toml` and a format
@@ -24,13 +25,12 @@ struct Gps {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    // 1. Write: formats (nested ones included) come from the types.
-    let mut w = Writer::new(Vec::new(), WriterOptions::default())?;
+    // 1. Write: formats (nested ones included) come from the types; declare every topic
+    // before the first row.
+    let path = std::env::temp_dir().join("quickstart.ulg");
+    let mut w = Writer::create(&path, WriterOptions::default())?;
     w.info("sys_name", &Value::String("quickrover".into()))?;
     w.parameter("BAT_N_CELLS", ParamValue::Int32(4))?;
-    w.define::<BatteryStatus>()?;
-    w.define::<VehicleAttitude>()?;
-    w.define::<Gps>()?;
     let battery = w.topic::<BatteryStatus>(0)?;
     let attitude = w.topic::<VehicleAttitude>(0)?;
     let gps = w.topic::<Gps>(0)?;
@@ -77,8 +77,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         )?;
     }
     w.log(b'6', 1_450_000, "landed")?;
-    let bytes = w.into_inner();
-    println!("wrote a {}-byte log\n", bytes.len());
+    w.flush()?;
+    drop(w);
+    let bytes = std::fs::read(&path)?;
+    println!(
+        "wrote a {}-byte log to {} (try `ulog info` on it)\n",
+        bytes.len(),
+        path.display()
+    );
 
     // 2. Read typed: each type is checked against the file's own format, once.
     let log = Log::from_slice(&bytes)?;

@@ -449,6 +449,38 @@ pub fn check_file(path: &Path, o: &Json) -> Vec<String> {
     );
     let subs = p["subscriptions"].as_array().unwrap();
     d.eq("subscriptions with data", ours.len(), subs.len());
+    // `Log::topics`: pyulog's data_list, one entry per instance with data.
+    let summaries = log.topics();
+    d.eq("topics", summaries.len(), subs.len());
+    for s in subs {
+        let (name, multi_id) = (s["name"].as_str().unwrap(), s["multi_id"].as_u64().unwrap());
+        let Some(t) = summaries
+            .iter()
+            .find(|t| t.name == name && u64::from(t.multi_id) == multi_id)
+        else {
+            d.fail(format!("topics: no {name}#{multi_id}"));
+            continue;
+        };
+        let n = s["n_data"].as_u64().unwrap() as usize;
+        if blind.is_empty() {
+            d.eq(format!("topics {name}#{multi_id} rows"), t.rows, n);
+            d.eq(
+                format!("topics {name}#{multi_id} first"),
+                t.first_timestamp,
+                s["first_timestamp"].as_u64(),
+            );
+            d.eq(
+                format!("topics {name}#{multi_id} last"),
+                t.last_timestamp,
+                s["last_timestamp"].as_u64(),
+            );
+        } else if t.rows < n {
+            d.fail(format!(
+                "topics {name}#{multi_id}: {} rows, pyulog {n}",
+                t.rows
+            ));
+        }
+    }
     for s in subs {
         let key = (
             s["name"].as_str().unwrap().to_owned(),

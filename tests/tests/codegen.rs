@@ -264,7 +264,7 @@ fn msg_types_carry_px4_layout_constants_and_topics() {
         (msg::Alpha::HALF, msg::Alpha::PI),
         (0.5f32, std::f64::consts::PI)
     );
-    assert!(msg::Alpha::FLAG_ON);
+    const { assert!(msg::Alpha::FLAG_ON) };
     assert_eq!(msg::Alpha::lower_case, 3);
     assert_eq!(
         msg_mixed::Gimbal::FORMAT.to_format().to_string(),
@@ -307,7 +307,7 @@ fn msg_types_carry_px4_layout_constants_and_topics() {
             .unwrap()
             .collect()
     };
-    assert_eq!(read("alpha"), [alpha.clone()]);
+    assert_eq!(read("alpha"), std::slice::from_ref(&alpha));
     assert_eq!(read("alpha_backup")[0].timestamp, 6);
     assert_eq!(
         log.metadata().schema().get("alpha_backup").unwrap().fields,

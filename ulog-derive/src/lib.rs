@@ -3,8 +3,8 @@
 //! Use it through `ulog_runtime`, which re-exports it next to the `ULog` trait; the
 //! attributes and field types are documented there (`ulog_runtime::ULog`).
 //!
-//! The pipeline: [`ast`] and [`attr`] parse the input and collect every error, [`check`] applies
-//! the naming and shape rules one per function, [`expand`] generates the impls.
+//! The pipeline: `ast` and `attr` parse the input and collect every error, `check` applies
+//! the naming and shape rules one per function, `expand` generates the impls.
 
 mod ast;
 mod attr;

@@ -8,7 +8,7 @@
 //! - [`typed`]: Rust structs as ULog formats (`#[derive(ULog)]`), checked against a file's
 //!   own definitions once, then decoded by offset reads ([`Log::topic`]) and written
 //!   ([`Writer::topic`]).
-//! - [`write`]: a [`Writer`] of version-1 files.
+//! - [`write`](mod@write): a [`Writer`] of version-1 files.
 //!
 //! ```no_run
 //! # fn main() -> Result<(), ulog_runtime::ReadError> {

@@ -298,12 +298,23 @@ fn info_carries_the_facts_of_ulog_info() {
                 );
                 checked += 1;
             } else if section == "Info Multiple Messages:" && line.starts_with(' ') {
-                // ` key: [[part, ...], ...]`: ours lists each value as `  key N: text`.
-                let (key, _) = line[1..].split_once(": ").unwrap();
+                // ` key: [['part', ...], ...]`: ours names the key, then (with -v) lists
+                // each value's parts, quoted.
+                let (key, values) = line[1..].split_once(": ").unwrap();
+                let at = ours
+                    .find(&format!("\n  {key} ("))
+                    .unwrap_or_else(|| panic!("{stem}: multi info {key}"));
                 assert!(
-                    ours.contains(&format!("  {key} 0: ")),
+                    ours[at..].contains("\n    0: \""),
                     "{stem}: multi info {key}"
                 );
+                // The first part's first line is shown as pyulog shows it.
+                let first = values
+                    .trim_start_matches("[['")
+                    .split("\\n")
+                    .next()
+                    .unwrap();
+                assert!(ours[at..].contains(first), "{stem}: {first}");
                 checked += 1;
             } else if section.starts_with("Name (") && line.starts_with(' ') {
                 // ` name (multi, size)   rows   bytes`
@@ -368,6 +379,21 @@ fn snapshot_log(dir: &Path) -> PathBuf {
     w.format("esc_status:uint64_t timestamp;uint8_t esc_count;uint8_t[7] _padding0;esc_report[2] esc;char[4] name;")
         .unwrap();
     w.info("sys_name", &Value::String("snap".into())).unwrap();
+    w.info(
+        "ver_sw_release",
+        &Value::Scalar(ulog_runtime::Scalar::UInt32(0x010F_01C0)),
+    )
+    .unwrap();
+    // Binary data in two continued parts, as PX4 writes its events metadata.
+    let blob = |from: u8| {
+        Value::Array(
+            (from..from + 20)
+                .map(|b| Value::Scalar(ulog_runtime::Scalar::UInt8(b)))
+                .collect(),
+        )
+    };
+    w.multi_info("blob", &blob(0), false).unwrap();
+    w.multi_info("blob", &blob(20), true).unwrap();
     w.info("perf_top", &Value::String("hidden unless -v".into()))
         .unwrap();
     w.multi_info("boot", &Value::String("a".into()), false)
@@ -461,6 +487,24 @@ fn json_and_codegen() {
     assert_eq!(doc["topics"].as_array().unwrap().len(), 2);
     assert_eq!(doc["topics"][0]["rows"].as_array().unwrap().len(), 11);
     assert_eq!(doc["info"]["sys_name"], "snap");
+    // Integer parameters stay integers; floats keep their shortest text.
+    assert!(
+        doc["parameters"]["SYS_AUTOSTART"].is_i64(),
+        "{}",
+        doc["parameters"]
+    );
+    assert_eq!(doc["parameters"]["SYS_AUTOSTART"], 4001);
+    assert_eq!(doc["parameters"]["MC_ROLL_P"].to_string(), "6.5");
+    assert_eq!(doc["parameter_changes"][0]["name"], "MC_ROLL_P");
+    assert_eq!(doc["parameter_changes"][0]["value"].to_string(), "6.75");
+    assert_eq!(doc["default_parameters"][0]["default_types"], 1);
+    assert_eq!(doc["multi_info"]["boot"], serde_json::json!([["a"]]));
+    assert_eq!(doc["dropouts"][0]["duration_ms"], 25);
+    assert_eq!(doc["logged_messages"][1]["tag"], 2);
+    assert_eq!(
+        doc["topics"][0]["rows"][10]["data"]["esc"][0]["esc_voltage"].to_string(),
+        "1.0"
+    );
     let code = stdout(&["codegen", file, "-m", "esc_status"]);
     let expected = ulog_runtime::codegen::Builder::new()
         .ulog_topics(&path, &["esc_status"])
@@ -495,6 +539,220 @@ fn errors_are_one_line_with_the_file_and_offset() {
     );
     let out = ulog(&["params", "--default", "nonsense", garbage.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2), "usage errors exit with 2");
+    // Plain messages, the path once.
+    let err = |args: &[&str]| {
+        let out = ulog(args);
+        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        String::from_utf8(out.stderr).unwrap()
+    };
+    let d = dir.to_str().unwrap();
+    assert_eq!(
+        err(&["info", d]),
+        format!("ulog: {d}: is a folder, not a log file\n")
+    );
+    let m = missing.to_str().unwrap();
+    assert_eq!(err(&["messages", m]), format!("ulog: {m}: no such file\n"));
+    // A topic the log lacks is an error for every verb that takes `-m`, with suggestions.
+    let log = snapshot_log(&dir);
+    let l = log.to_str().unwrap();
+    for verb in ["csv", "json", "codegen"] {
+        assert_eq!(
+            err(&[verb, l, "-m", "esc_stat"]),
+            format!("ulog: {l}: no topic `esc_stat` in this log; did you mean `esc_status`?\n"),
+            "{verb}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn info_shows_the_version_as_pyulog_and_binary_data_as_a_digest() {
+    use sha2::Digest;
+    let dir = temp_dir("version");
+    let log = snapshot_log(&dir);
+    let text = stdout(&["info", log.to_str().unwrap()]);
+    assert!(text.contains("\nSoftware:   v1.15.1 (RC)\n"), "{text}");
+    let digest: String = sha2::Sha256::digest((0..40u8).collect::<Vec<_>>())
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    assert!(
+        text.contains(&format!(
+            "\n  blob (uint8_t[20], 1 value)\n    0: binary, 40 bytes in 2 parts, sha256 {digest}\n"
+        )),
+        "{text}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+    // pyulog's `SW Version` line, on every corpus log.
+    let mut compared = 0;
+    for path in corpus_files() {
+        let Some(theirs) = pyulog_info(&path) else {
+            continue;
+        };
+        let theirs = theirs
+            .lines()
+            .find_map(|l| l.strip_prefix("SW Version: "))
+            .map(str::to_owned);
+        let ours = stdout(&["info", path.to_str().unwrap()]);
+        let ours = ours
+            .lines()
+            .find_map(|l| l.strip_prefix("Software:   "))
+            .filter(|v| v.starts_with('v'))
+            .map(str::to_owned);
+        assert_eq!(ours, theirs, "{}", short_name(&path));
+        compared += 1;
+    }
+    eprintln!("software versions compared with pyulog on {compared} logs");
+}
+
+/// pyulog's `ulog_info` output, run live (required under CI).
+fn pyulog_info(file: &Path) -> Option<String> {
+    let out = Command::new("python3")
+        .args([
+            "-c",
+            "import sys; from pyulog.info import main; sys.argv[0] = 'ulog_info'; main()",
+        ])
+        .arg(file)
+        .output()
+        .ok()
+        .filter(|o| o.status.success());
+    assert!(
+        out.is_some() || !under_ci(),
+        "under CI pyulog must be installed (.ci/run does it)"
+    );
+    out.map(|o| String::from_utf8_lossy(&o.stdout).into_owned())
+}
+
+#[test]
+fn pyulog_option_spellings_are_accepted() {
+    let dir = temp_dir("aliases");
+    let log = snapshot_log(&dir);
+    let l = log.to_str().unwrap();
+    let out = dir.join("out");
+    let o = out.to_str().unwrap();
+    // ulog2csv's -ts/-te (and --time_s/--time_e) are --start/--end.
+    let short = stdout(&["csv", l, "-o", o, "-ts", "3723.3", "-te", "3723.6"]);
+    let long = stdout(&[
+        "csv", l, "-o", o, "--time_s", "3723.3", "--time_e", "3723.6",
+    ]);
+    let ours = stdout(&["csv", l, "-o", o, "--start", "3723.3", "--end", "3723.6"]);
+    assert_eq!(short, ours);
+    assert_eq!(long, ours);
+    assert!(ours.contains("(3 rows)"), "{ours}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The PX4 `.msg` snapshots beside the corpus.
+fn msg_root() -> PathBuf {
+    match std::env::var_os("PX4_MSG_DIR") {
+        Some(dir) => dir.into(),
+        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/testdata/px4-msg"),
+    }
+}
+
+#[test]
+fn check_msg_says_whether_a_folder_makes_a_logs_formats() {
+    let root = msg_root();
+    let quad = corpus_dir().join("px4-ulog-rs/quadrotor_local.ulg");
+    let (same, other) = (
+        root.join("392e831c1f659429ca83902e66820d7094591410/msg"),
+        root.join("6c5a8e74eb2d173c0decb3feacd7e1932b64095b/msg"),
+    );
+    if !same.exists() || !quad.exists() {
+        assert!(!under_ci(), "the .msg snapshots and the corpus are needed");
+        return;
+    }
+    let (q, s, o) = (
+        quad.to_str().unwrap(),
+        same.to_str().unwrap(),
+        other.to_str().unwrap(),
+    );
+    let out = ulog(&["check-msg", s, q]);
+    assert!(out.status.success());
+    assert_eq!(
+        String::from_utf8(out.stdout).unwrap(),
+        "117/117 formats identical\n"
+    );
+    // An older snapshot: every difference named, exit 1.
+    let out = ulog(&["check-msg", o, q]);
+    assert_eq!(out.status.code(), Some(1));
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.ends_with("73/114 formats identical\n"), "{text}");
+    assert!(
+        text.contains(
+            "vehicle_status: differs from VehicleStatus.msg\n  field `bool avoidance_system_required` \
+             is in the .msg, not in the log\n"
+        ),
+        "{text}"
+    );
+    assert!(text.contains("  padding differs: uint8_t[6] after `pre_flight_checks_pass` in the log; uint8_t[4] after `pre_flight_checks_pass` in the .msg\n"), "{text}");
+    assert_eq!(
+        String::from_utf8(out.stderr).unwrap(),
+        format!("ulog: {q}: 41 of 114 formats differ\n")
+    );
+    // A folder that defines none of the log's formats: M = 0 is not a success.
+    let dir = temp_dir("checkmsg");
+    std::fs::write(dir.join("Other.msg"), "uint64 timestamp\n").unwrap();
+    let out = ulog(&["check-msg", dir.to_str().unwrap(), q]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(
+        String::from_utf8(out.stdout).unwrap(),
+        "0/0 formats identical\n"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn codegen_from_several_logs_and_msg_folders() {
+    let dir = temp_dir("codegen");
+    let a = snapshot_log(&dir);
+    // A second log where esc_count is wider and esc_status has one field more.
+    let b = dir.join("wider.ulg");
+    {
+        use ulog_runtime::{Writer, WriterOptions};
+        let mut w = Writer::create(&b, WriterOptions::default()).unwrap();
+        w.format("esc_report:int32_t esc_rpm;float esc_voltage;uint8_t[4] _padding0;")
+            .unwrap();
+        w.format("esc_status:uint64_t timestamp;uint16_t esc_count;uint8_t[6] _padding0;esc_report[2] esc;char[4] name;float extra;").unwrap();
+        let id = w.subscribe("esc_status", 0).unwrap();
+        w.data(id, &[0u8; 8 + 8 + 24 + 4 + 4]).unwrap();
+        w.flush().unwrap();
+    }
+    let (a, b) = (a.to_str().unwrap(), b.to_str().unwrap());
+    let code = stdout(&["codegen", a, b, "-m", "esc_status"]);
+    let expected = ulog_runtime::codegen::Builder::new()
+        .ulog_topics(a, &["esc_status"])
+        .ulog_topics(b, &["esc_status"])
+        .merge(ulog_runtime::codegen::Merge::Lossless)
+        .render()
+        .unwrap();
+    assert_eq!(code, expected);
+    assert!(
+        code.contains("#[ulog(widen)]\n    pub esc_count: u16,"),
+        "{code}"
+    );
+    assert!(
+        code.contains("pub extra: ::core::option::Option<f32>,"),
+        "{code}"
+    );
+    let msg = dir.join("msg");
+    std::fs::create_dir_all(&msg).unwrap();
+    std::fs::write(
+        msg.join("Rover.msg"),
+        "uint64 timestamp\nfloat32 speed\n# TOPICS rover rover_backup\n",
+    )
+    .unwrap();
+    let code = stdout(&[
+        "codegen",
+        "--msg-dir",
+        msg.to_str().unwrap(),
+        "-m",
+        "rover_backup",
+    ]);
+    assert!(
+        code.contains("topics(\"rover\", \"rover_backup\")"),
+        "{code}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

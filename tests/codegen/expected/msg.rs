@@ -13,7 +13,7 @@
     topics("alpha", "alpha_backup", "alpha_replay"),
     crate = "::ulog_runtime"
 )]
-#[allow(clippy::pub_underscore_fields)]
+#[allow(clippy::pub_underscore_fields, clippy::doc_markdown)]
 pub struct Alpha {
     /// time since system start (microseconds)
     ///
@@ -51,7 +51,7 @@ pub struct Alpha {
 }
 
 /// The constants of `codegen/msg/Alpha.msg`.
-#[allow(clippy::unreadable_literal)]
+#[allow(clippy::unreadable_literal, clippy::approx_constant, clippy::doc_markdown)]
 impl Alpha {
     /// `uint32 MESSAGE_VERSION = 1`
     pub const MESSAGE_VERSION: u32 = 1;
@@ -96,7 +96,7 @@ impl Alpha {
 /// `beta:uint32_t count;uint8_t state;uint8_t[3] _padding0;`
 #[derive(::ulog_runtime::ULog, Debug, Clone, PartialEq)]
 #[ulog(name = "beta", crate = "::ulog_runtime")]
-#[allow(clippy::pub_underscore_fields)]
+#[allow(clippy::pub_underscore_fields, clippy::doc_markdown)]
 pub struct Beta {
     /// `uint32_t count`
     pub count: u32,
@@ -115,6 +115,7 @@ pub struct Beta {
 /// `zeta:uint64_t timestamp;uint32_t a;uint32_t b;beta inner;`
 #[derive(::ulog_runtime::ULog, Debug, Clone, PartialEq)]
 #[ulog(name = "zeta", crate = "::ulog_runtime")]
+#[allow(clippy::doc_markdown)]
 pub struct Zeta {
     /// `uint64_t timestamp`
     pub timestamp: u64,

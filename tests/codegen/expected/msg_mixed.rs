@@ -7,7 +7,7 @@
 /// `gimbal:uint64_t timestamp;float angle;uint8_t[4] _padding0;odd_part first;uint8_t[5] _padding1;odd_part[2] more;uint8_t[2] _padding2;`
 #[derive(::ulog_runtime::ULog, Debug, Clone, PartialEq)]
 #[ulog(name = "gimbal", crate = "::ulog_runtime")]
-#[allow(clippy::pub_underscore_fields)]
+#[allow(clippy::pub_underscore_fields, clippy::doc_markdown)]
 pub struct Gimbal {
     /// `uint64_t timestamp`
     pub timestamp: u64,

@@ -281,9 +281,14 @@ fn one_type(
     if underscore {
         allows.push(quote!(clippy::pub_underscore_fields));
     }
+    // Comments of `.msg` files are prose with C names in it, not Markdown.
+    let prose = def.plain_docs && (def.doc.is_some() || !def.field_docs.is_empty());
+    if prose {
+        allows.push(quote!(clippy::doc_markdown));
+    }
     let allow = (!allows.is_empty()).then(|| quote!(#[allow(#(#allows),*)]));
     let doc = doc_lines(&doc);
-    let constants = constants(def, &ident, krate, vis);
+    let constants = constants(def, &ident, krate, vis, def.plain_docs);
     Ok(quote! {
         #(#[doc = #doc])*
         #[derive(#krate::ULog, Debug, Clone, PartialEq #(, #derives)*)]
@@ -303,6 +308,7 @@ fn constants(
     ident: &Ident,
     krate: &syn::Path,
     vis: &syn::Visibility,
+    prose: bool,
 ) -> Option<TokenStream> {
     if def.constants.is_empty() {
         return None;
@@ -330,9 +336,11 @@ fn constants(
         }
     });
     let doc = format!(" The constants of `{}`.", def.place.doc_text());
+    // The values are the file's, whatever they look like, and so are the comments.
+    let prose = prose.then(|| quote!(, clippy::doc_markdown));
     Some(quote! {
         #[doc = #doc]
-        #[allow(clippy::unreadable_literal)]
+        #[allow(clippy::unreadable_literal, clippy::approx_constant #prose)]
         impl #ident {
             #(#items)*
         }
@@ -510,6 +518,8 @@ fn doc_text(text: &str, plain: bool) -> Vec<String> {
             if !plain {
                 return line.to_owned();
             }
+            // Tabs align columns in `.msg` comments; rustdoc wants spaces.
+            let line = &line.replace('\t', "    ");
             let mut out = String::with_capacity(line.len());
             for word in line.split_inclusive(' ') {
                 let (w, space) = match word.strip_suffix(' ') {

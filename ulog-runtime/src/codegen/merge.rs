@@ -35,7 +35,10 @@ struct Seen<'a> {
 /// Merges definitions of one name (at least two, not all equal).
 pub(crate) fn merge(group: Vec<Definition>, mode: Merge) -> Result<Definition, CodegenError> {
     let name = group[0].format.name.clone();
-    let places: Vec<String> = group.iter().map(|d| d.place.to_string()).collect();
+    let places: Vec<String> = group
+        .iter()
+        .map(|d| format!("`{}`", d.place.doc_text()))
+        .collect();
     // Union of the data fields, in order of first appearance.
     let mut seen: Vec<Seen<'_>> = Vec::new();
     for (i, def) in group.iter().enumerate() {

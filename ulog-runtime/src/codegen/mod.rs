@@ -1,17 +1,24 @@
 //! The build-script generator: Rust types (structs with `#[derive(ULog)]`) from ULog topic
 //! definitions. Feature `codegen`.
 //!
-//! Three kinds of input, mixed freely in one build:
-//! - format strings as `F` messages carry them:
-//!   `vehicle_attitude:uint64_t timestamp;float[4] q;uint8_t[4] _padding0;`;
-//! - TOML topic files (schema below), with doc text and per-topic options;
-//! - the `F` definitions of an existing `.ulg` log, all of them or some topics (and the
-//!   types they nest).
+//! Four kinds of input, mixed freely in one build:
+//! - format strings as `F` messages carry them, such as
+//!   `vehicle_attitude:uint64_t timestamp;float[4] q;uint8_t[4] _padding0;`
+//!   ([`Builder::format`]);
+//! - TOML topic files (schema below), with doc text and per-topic options
+//!   ([`Builder::toml`]);
+//! - the `F` definitions of an existing `.ulg` log, all of them or some topics and the types
+//!   they nest ([`Builder::ulog`], [`Builder::ulog_topics`]);
+//! - PX4's own `.msg` files, one or a folder (PX4-Autopilot's `msg/`), laid out exactly as
+//!   PX4 logs them, with their constants and `# TOPICS` ([`Builder::msg`],
+//!   [`Builder::msg_dir`], [`Builder::msg_dir_topics`]; see [`msg`]).
 //!
 //! Nested types resolve across all inputs. A type used but never defined, a cycle, or two
-//! different definitions under one name is an error naming the places involved. The output
-//! is one Rust file, formatted, starting with an `@generated` line, rewritten only when its
-//! content changes; [`Builder::generate`] prints `cargo:rerun-if-changed` for every input file.
+//! different definitions under one name is an error naming the places involved; with
+//! [`Builder::merge`], definitions that differ (the logs of several PX4 versions) become
+//! one type that reads them all. The output is one Rust file, formatted, starting with an
+//! `@generated` line, rewritten only when its content changes; [`Builder::generate`] prints
+//! `cargo:rerun-if-changed` for every input file (and `.msg` folder).
 //!
 //! ```no_run
 //! // build.rs
@@ -60,8 +67,36 @@
 //! Topic `vehicle_attitude` becomes `VehicleAttitude`. Field names that are Rust keywords
 //! (`type`) or not snake case (`airspeedSp`, `R_body`) become `type_`, `airspeed_sp`, `r_body`
 //! and keep their ULog name through `#[ulog(rename = "...")]`; padding fields stay padding
-//! (`[u8; N]`). Every struct and field gets a doc comment: the TOML doc, the ULog name and
-//! type, and the original format string.
+//! (`[u8; N]`). Every struct and field gets a doc comment: the TOML doc (or the `.msg`
+//! comments), the ULog name and type, and the original format string. A `.msg` file's type
+//! keeps the file's name (`VehicleStatus.msg` -> `VehicleStatus`), its constants become
+//! associated constants (`VehicleStatus::ARMING_STATE_ARMED: u8`), and its `# TOPICS`
+//! names become `#[ulog(topics(...))]`, read with [`Log::topic_as`](crate::Log::topic_as).
+//! A single `char` field is [`Char`](crate::Char); a format whose `timestamp` is not an
+//! unsigned integer is `#[ulog(nested)]` (never a topic).
+//!
+//! # One type for many inputs
+//!
+//! With [`Builder::merge`]`(`[`Merge::Lossless`]`)`, the definitions of one name that differ
+//! across inputs (the logs of a fleet of PX4 versions, several `.msg` folders) become one
+//! type that reads every one of them: fields present everywhere are plain, fields some lack
+//! are `Option`, fields whose types differ get the narrowest type that holds every value of
+//! each (`uint8_t` and `int32_t` -> `i32`, `float` and `double` -> `f64`) with
+//! `#[ulog(widen)]`, and a field without one (`int64_t` and `uint64_t`, arrays of different
+//! lengths) is left out, its doc comment naming the inputs and types; [`Merge::Strict`]
+//! makes that an error instead. Padding is left out of merged types; doc comments say which
+//! input has which type.
+//!
+//! ```no_run
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! use ulog_runtime::codegen::{Builder, Merge};
+//! Builder::new()
+//!     .ulog("logs/2019.ulg")
+//!     .ulog("logs/2026.ulg")
+//!     .merge(Merge::Lossless)
+//!     .generate("fleet.rs")?;
+//! # Ok(()) }
+//! ```
 
 mod emit;
 mod input;
@@ -459,7 +494,7 @@ impl Builder {
         let mut read: Vec<Vec<Definition>> = Vec::with_capacity(self.inputs.len());
         // The `.msg` files of every input, and per input its files (indices) and topics.
         let mut msg_files = Vec::new();
-        let mut msg_inputs: Vec<(usize, Vec<usize>, Option<(&Path, &[String])>)> = Vec::new();
+        let mut msg_inputs: Vec<MsgInput<'_>> = Vec::new();
         let mut format_count = 0;
         for (k, input) in self.inputs.iter().enumerate() {
             read.push(match input {
@@ -647,6 +682,10 @@ pub(crate) struct Resolved {
     pub(crate) defs: Vec<Definition>,
     pub(crate) schema: Schema,
 }
+
+/// A `.msg` input while reading: its index among the inputs, its files (indices among all
+/// `.msg` files read), and the folder and topics it is filtered to.
+type MsgInput<'a> = (usize, Vec<usize>, Option<(&'a Path, &'a [String])>);
 
 /// The files of `files` (indices into `all`) that define one of `topics` (a `# TOPICS`
 /// name or the snake-case name), and the files they nest, in file order.

@@ -312,8 +312,8 @@ fn merging_strictly_refuses_fields_without_a_common_type() {
     b.merge(Merge::Strict);
     assert_eq!(
         b.render().unwrap_err().to_string(),
-        "`t`: field `x` has no type that holds every value of its types: `int64_t` in format \
-         string #1; `uint64_t` in format string #2"
+        "`t`: field `x` has no type that holds every value of its types: `int64_t` in \
+         `format string #1`; `uint64_t` in `format string #2`"
     );
     b.merge(Merge::Lossless);
     let code = b.render().unwrap();

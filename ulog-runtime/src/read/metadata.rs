@@ -47,6 +47,17 @@ impl ParamValue {
     }
 }
 
+/// As a JSON number: an integer or a `float` (its shortest text).
+#[cfg(feature = "serde")]
+impl serde::Serialize for ParamValue {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match *self {
+            ParamValue::Int32(v) => s.serialize_i32(v),
+            ParamValue::Float(v) => s.serialize_f32(v),
+        }
+    }
+}
+
 impl std::fmt::Display for ParamValue {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
@@ -54,6 +65,20 @@ impl std::fmt::Display for ParamValue {
             ParamValue::Float(v) => write!(f, "{v}"),
         }
     }
+}
+
+/// A firmware version, as PX4 packs it into the info `ver_sw_release`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct VersionInfo {
+    /// Major version.
+    pub major: u8,
+    /// Minor version.
+    pub minor: u8,
+    /// Patch version.
+    pub patch: u8,
+    /// Below 64: development; 64..128 alpha; 128..192 beta; 192..255 release candidate; 255
+    /// release.
+    pub kind: u8,
 }
 
 /// A `P` message of the definitions section: a parameter's value when logging started.
@@ -377,6 +402,50 @@ impl Metadata {
     /// Parameters as logging started (the definitions section), in order of first appearance.
     pub fn initial_parameters(&self) -> &[Parameter] {
         &self.initial_parameters
+    }
+
+    /// The value of a parameter as logging started.
+    ///
+    /// ```no_run
+    /// # let log = ulog_runtime::Log::open("flight.ulg")?;
+    /// if let Some(v) = log.metadata().parameter("MPC_XY_VEL_MAX") {
+    ///     println!("max horizontal speed {} m/s", v.as_f64());
+    /// }
+    /// # Ok::<(), ulog_runtime::ReadError>(())
+    /// ```
+    pub fn parameter(&self, name: &str) -> Option<ParamValue> {
+        self.initial_parameters
+            .iter()
+            .find(|p| p.name == name)
+            .map(|p| p.value)
+    }
+
+    /// The firmware version PX4 writes in the info `ver_sw_release` (`0xMMmmpptt`).
+    pub fn version_info(&self) -> Option<VersionInfo> {
+        let v = self.info_value("ver_sw_release")?.as_scalar()?.as_i128()?;
+        let v = u32::try_from(v).ok()?;
+        let [major, minor, patch, kind] = v.to_be_bytes();
+        Some(VersionInfo {
+            major,
+            minor,
+            patch,
+            kind,
+        })
+    }
+
+    /// The firmware version as pyulog's `get_version_info_str` gives it: `v1.15.1`, with
+    /// ` (alpha)`, ` (beta)` or ` (RC)` for those; `None` for a development build or a log
+    /// without `ver_sw_release`.
+    pub fn software_version(&self) -> Option<String> {
+        let v = self.version_info()?;
+        let kind = match v.kind {
+            0..64 => return None,
+            64..128 => " (alpha)",
+            128..192 => " (beta)",
+            192..255 => " (RC)",
+            255 => "",
+        };
+        Some(format!("v{}.{}.{}{kind}", v.major, v.minor, v.patch))
     }
 
     /// Default parameters, in file order.

@@ -7,6 +7,7 @@ mod log;
 mod message;
 mod metadata;
 mod stream;
+mod topics;
 
 pub use log::{DataRows, Log, Rows, Summary, fold_rows, summarize};
 pub use message::{
@@ -15,9 +16,10 @@ pub use message::{
 };
 pub use metadata::{
     DefaultParameter, Dropout, Info, LogLevel, LoggedMessage, Metadata, MultiInfo, ParamValue,
-    Parameter, ParameterChange, Subscription,
+    Parameter, ParameterChange, Subscription, VersionInfo,
 };
 pub use stream::{Event, StreamReader};
+pub use topics::TopicSummary;
 
 use crate::error::{Diagnostic, DiagnosticKind, ReadError};
 use crate::schema::Schema;

@@ -648,3 +648,75 @@ fn appended_offsets_near_the_end_of_u64_do_not_overflow() {
         assert_eq!(&diags, log.diagnostics());
     }
 }
+
+#[test]
+fn helpers_pyulog_users_look_for() {
+    let version = |v: u32| {
+        let mut f = File::v1(0);
+        f.info("uint32_t ver_sw_release", &v.to_le_bytes());
+        Log::from_vec(f.0).unwrap().metadata().software_version()
+    };
+    // As pyulog's get_version_info_str: 0xMMmmpptt, tt < 64 is a development build.
+    assert_eq!(version(0x010F_01FF).as_deref(), Some("v1.15.1"));
+    assert_eq!(version(0x0110_00C0).as_deref(), Some("v1.16.0 (RC)"));
+    assert_eq!(version(0x0110_0080).as_deref(), Some("v1.16.0 (beta)"));
+    assert_eq!(version(0x0110_0040).as_deref(), Some("v1.16.0 (alpha)"));
+    assert_eq!(version(0x010F_0100), None);
+    assert_eq!(
+        Log::from_vec(File::v1(0).0)
+            .unwrap()
+            .metadata()
+            .software_version(),
+        None
+    );
+
+    let mut f = File::v1(0);
+    let param = |f: &mut File, name: &str, v: i32| {
+        f.msg(Message::Parameter(KeyValue {
+            key: format!("int32_t {name}").as_bytes(),
+            value: &v.to_le_bytes(),
+        }));
+    };
+    param(&mut f, "B_PARAM", 1);
+    param(&mut f, "A_PARAM", 2);
+    f.format("t:uint64_t timestamp;");
+    for (multi_id, msg_id) in [(1, 0), (0, 1)] {
+        f.msg(Message::Subscribe {
+            multi_id,
+            msg_id,
+            name: b"t",
+        });
+    }
+    for (msg_id, t) in [(0u16, 10u64), (1, 20), (0, 30)] {
+        f.msg(Message::Data {
+            msg_id,
+            data: &t.to_le_bytes(),
+        });
+        if t == 20 {
+            param(&mut f, "B_PARAM", 5);
+            param(&mut f, "A_PARAM", 6);
+            param(&mut f, "B_PARAM", 7);
+        }
+    }
+    let log = Log::from_vec(f.0).unwrap();
+    assert_eq!(
+        log.metadata().parameter("A_PARAM"),
+        Some(ParamValue::Int32(2))
+    );
+    assert_eq!(log.metadata().parameter("C_PARAM"), None);
+    let changed: Vec<(&str, Vec<i32>)> = log
+        .changed_parameters()
+        .into_iter()
+        .map(|(n, c)| (n, c.iter().map(|c| c.value.as_f64() as i32).collect()))
+        .collect();
+    assert_eq!(changed, [("A_PARAM", vec![6]), ("B_PARAM", vec![5, 7])]);
+    let topics: Vec<String> = log
+        .topics()
+        .iter()
+        .map(|t| {
+            let (first, last) = (t.first_timestamp.unwrap(), t.last_timestamp.unwrap());
+            format!("{}#{} {} rows {first}..{last}", t.name, t.multi_id, t.rows)
+        })
+        .collect();
+    assert_eq!(topics, ["t#0 1 rows 20..20", "t#1 2 rows 10..30"]);
+}

@@ -57,6 +57,7 @@
 //! | `#[ulog(topics("vehicle_attitude", "estimator_attitude"))]` | struct | every topic the type stands for (PX4's `# TOPICS`): [`TypedFormat::topics`]; read and write under any with [`Log::topic_as`](crate::Log::topic_as) and [`Writer::topic_as`](crate::Writer::topic_as) |
 //! | `#[ulog(exact)]` | struct | reading requires the file's format to be identical: fields, order, padding |
 //! | `#[ulog(widen)]` | struct or field | numeric fields also accept narrower file types they hold every value of (see below) |
+//! | `#[ulog(nested)]` | struct | only ever nested, never a topic: no [`Topic`] impl, and a `timestamp` field may have any type |
 //! | `#[ulog(crate = "path")]` | struct | where the runtime crate is, for code that renames `ulog-runtime` |
 //! | `#[ulog(rename = "type")]` | field | the field's name in the file |
 //! | `#[ulog(padding)]` | field (`[u8; N]`) | written as zeros and named `_paddingK` (K counts padding fields); trailing padding is left out of data rows, as PX4 does |

@@ -31,14 +31,53 @@ pub(crate) fn hms(us: u64) -> String {
     format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
 }
 
-/// A value for people: text without quotes, numbers as Python prints them.
+/// A value for people: text without quotes, numbers as Python prints them, binary data
+/// (byte arrays) summarized.
 fn plain(v: &Value) -> String {
+    if let Some(bytes) = binary(std::slice::from_ref(v)) {
+        return summary(&bytes, 1);
+    }
     match v {
         Value::String(s) => s.clone(),
         Value::Scalar(ulog_runtime::Scalar::Float(x)) => f32_text(*x),
         Value::Scalar(ulog_runtime::Scalar::Double(x)) => f64_text(*x),
         other => other.to_string(),
     }
+}
+
+/// Byte arrays longer than a line are binary data, printed as their size and sha256.
+const BINARY_FROM: usize = 32;
+
+/// The bytes of values that are byte arrays (`uint8_t[N]`, `int8_t[N]`), joined, if
+/// together they are long enough to be binary data.
+fn binary(parts: &[Value]) -> Option<Vec<u8>> {
+    let mut bytes = Vec::new();
+    for part in parts {
+        let Value::Array(items) = part else {
+            return None;
+        };
+        for item in items {
+            match item.as_scalar()? {
+                ulog_runtime::Scalar::UInt8(b) => bytes.push(b),
+                ulog_runtime::Scalar::Int8(b) => bytes.push(b as u8),
+                _ => return None,
+            }
+        }
+    }
+    (bytes.len() >= BINARY_FROM).then_some(bytes)
+}
+
+/// `16704 bytes in 15 parts, sha256 9f...`.
+fn summary(bytes: &[u8], parts: usize) -> String {
+    use sha2::Digest;
+    let digest = sha2::Sha256::digest(bytes);
+    let hex: String = digest.iter().map(|b| format!("{b:02x}")).collect();
+    let parts = if parts > 1 {
+        format!(" in {parts} parts")
+    } else {
+        String::new()
+    };
+    format!("binary, {} bytes{parts}, sha256 {hex}", bytes.len())
 }
 
 fn info(log: &Log<'_>, file: &Path, verbose: bool, out: &mut impl Write) -> Result<(), Failure> {
@@ -51,6 +90,11 @@ fn info(log: &Log<'_>, file: &Path, verbose: bool, out: &mut impl Write) -> Resu
         log.bytes().len(),
         header.version
     )?;
+    match (meta.software_version(), meta.version_info()) {
+        (Some(v), _) => writeln!(out, "Software:   {v}")?,
+        (None, Some(_)) => writeln!(out, "Software:   a development build")?,
+        (None, None) => {}
+    }
     let start = header.start_timestamp;
     let duration = meta.last_timestamp().saturating_sub(start);
     writeln!(
@@ -134,13 +178,30 @@ fn info(log: &Log<'_>, file: &Path, verbose: bool, out: &mut impl Write) -> Resu
     if !meta.multi_info().is_empty() {
         writeln!(out, "Multi info:")?;
         for m in meta.multi_info() {
-            if verbose {
-                for (k, parts) in m.values.iter().enumerate() {
-                    let text: String = parts.iter().map(plain).collect();
-                    writeln!(out, "  {} {k}: {text}", m.key)?;
+            let count = m.values.len();
+            let text = m.values.iter().any(|parts| binary(parts).is_none());
+            writeln!(
+                out,
+                "  {} ({}, {count} value{}){}",
+                m.key,
+                m.type_name,
+                if count == 1 { "" } else { "s" },
+                if text && !verbose {
+                    " (-v shows them)"
+                } else {
+                    ""
                 }
-            } else {
-                writeln!(out, "  {}: {} values", m.key, m.values.len())?;
+            )?;
+            for (k, parts) in m.values.iter().enumerate() {
+                // Binary data (a compressed blob split over continued messages) as one
+                // summary; text part by part, as pyulog lists them, with -v.
+                if let Some(bytes) = binary(parts) {
+                    writeln!(out, "    {k}: {}", summary(&bytes, parts.len()))?;
+                } else if verbose {
+                    let quoted: Vec<String> =
+                        parts.iter().map(|p| format!("{:?}", plain(p))).collect();
+                    writeln!(out, "    {k}: {}", quoted.join(" + "))?;
+                }
             }
         }
     }

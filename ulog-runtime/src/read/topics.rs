@@ -1,0 +1,81 @@
+//! What pyulog users look for first in a whole-file [`Log`]: the topics with their row
+//! counts and time ranges, and the parameter changes grouped by name.
+
+use super::{Log, ParameterChange};
+
+/// One topic instance of a log ([`Log::topics`]): every subscription of that name and
+/// `multi_id` together.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TopicSummary {
+    /// The topic (format) name.
+    pub name: String,
+    /// The instance.
+    pub multi_id: u8,
+    /// The `msg_id`s of its subscriptions, in file order (one unless resubscribed).
+    pub msg_ids: Vec<u16>,
+    /// Rows read.
+    pub rows: usize,
+    /// Timestamp of the first row, µs.
+    pub first_timestamp: Option<u64>,
+    /// Timestamp of the last row, µs.
+    pub last_timestamp: Option<u64>,
+}
+
+impl Log<'_> {
+    /// Every topic instance with at least one row, sorted by name and `multi_id` (as pyulog's
+    /// `data_list`, which has only those).
+    ///
+    /// ```no_run
+    /// # let log = ulog_runtime::Log::open("flight.ulg")?;
+    /// for t in log.topics() {
+    ///     println!("{} #{}: {} rows", t.name, t.multi_id, t.rows);
+    /// }
+    /// # Ok::<(), ulog_runtime::ReadError>(())
+    /// ```
+    pub fn topics(&self) -> Vec<TopicSummary> {
+        let mut out: Vec<TopicSummary> = Vec::new();
+        for sub in self.subscriptions() {
+            let rows = self.rows(sub);
+            if rows.len() == 0 {
+                continue;
+            }
+            let first = self.rows(sub).next().map(|r| r.timestamp);
+            let last = self.rows(sub).next_back().map(|r| r.timestamp);
+            match out
+                .iter_mut()
+                .find(|t| t.name == sub.name && t.multi_id == sub.multi_id)
+            {
+                Some(t) => {
+                    t.msg_ids.push(sub.msg_id);
+                    t.rows += rows.len();
+                    t.first_timestamp = t.first_timestamp.min(first).or(first);
+                    t.last_timestamp = t.last_timestamp.max(last);
+                }
+                None => out.push(TopicSummary {
+                    name: sub.name.clone(),
+                    multi_id: sub.multi_id,
+                    msg_ids: vec![sub.msg_id],
+                    rows: rows.len(),
+                    first_timestamp: first,
+                    last_timestamp: last,
+                }),
+            }
+        }
+        out.sort_by(|a, b| (&a.name, a.multi_id).cmp(&(&b.name, b.multi_id)));
+        out
+    }
+
+    /// The parameters that changed during the log, each with its changes in file order,
+    /// sorted by name.
+    pub fn changed_parameters(&self) -> Vec<(&str, Vec<&ParameterChange>)> {
+        let mut out: Vec<(&str, Vec<&ParameterChange>)> = Vec::new();
+        for c in self.parameter_changes() {
+            match out.iter_mut().find(|(n, _)| *n == c.name) {
+                Some((_, changes)) => changes.push(c),
+                None => out.push((&c.name, vec![c])),
+            }
+        }
+        out.sort_by(|a, b| a.0.cmp(b.0));
+        out
+    }
+}
