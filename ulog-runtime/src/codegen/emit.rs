@@ -53,7 +53,7 @@ pub(crate) fn field_name(name: &str) -> String {
         }
         out.push(c.to_ascii_lowercase());
     }
-    if out.is_empty() || out.starts_with(|c: char| c.is_ascii_digit()) {
+    if out.is_empty() || out == "_" || out.starts_with(|c: char| c.is_ascii_digit()) {
         out.insert_str(0, "f_");
     }
     if KEYWORDS.contains(&out.as_str()) {

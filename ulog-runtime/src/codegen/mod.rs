@@ -437,24 +437,32 @@ impl Builder {
             .collect())
     }
 
+    /// The files and folders [`Builder::generate`] asks cargo to watch
+    /// (`cargo:rerun-if-changed`): every TOML file, log and `.msg` file, and every `.msg`
+    /// folder (for files added or removed) with its files.
+    pub fn watched_files(&self) -> Result<Vec<PathBuf>, CodegenError> {
+        let mut out = Vec::new();
+        for input in &self.inputs {
+            match input {
+                Input::Toml(path) | Input::Log { path, .. } | Input::Msg(path) => {
+                    out.push(path.clone());
+                }
+                Input::MsgDir { dir, .. } => {
+                    out.push(dir.clone());
+                    out.extend(msg::files_in(dir)?);
+                }
+                Input::Format(_) => {}
+            }
+        }
+        Ok(out)
+    }
+
     /// Writes the generated file: a relative `file` goes into `OUT_DIR`. The file is rewritten
     /// only if its content changes; `cargo:rerun-if-changed` is printed for every input file.
     /// Returns the path written.
     pub fn generate(&self, file: impl AsRef<Path>) -> Result<PathBuf, CodegenError> {
-        for input in &self.inputs {
-            match input {
-                Input::Toml(path) | Input::Log { path, .. } | Input::Msg(path) => {
-                    println!("cargo:rerun-if-changed={}", path.display());
-                }
-                Input::MsgDir { dir, .. } => {
-                    // The folder itself, for files added or removed.
-                    println!("cargo:rerun-if-changed={}", dir.display());
-                    for file in msg::files_in(dir)? {
-                        println!("cargo:rerun-if-changed={}", file.display());
-                    }
-                }
-                Input::Format(_) => {}
-            }
+        for path in self.watched_files()? {
+            println!("cargo:rerun-if-changed={}", path.display());
         }
         let content = self.render()?;
         let file = file.as_ref();

@@ -149,6 +149,8 @@ fn rust_names() {
     assert_eq!(field_name("type"), "type_");
     assert_eq!(field_name("self"), "self_");
     assert_eq!(field_name("5v"), "f_5v");
+    assert_eq!(field_name("_"), "f__");
+    assert_eq!(field_name("__"), "__");
     assert_eq!(field_name("q"), "q");
 }
 
@@ -259,6 +261,17 @@ fn msg_folders_resolve_across_inputs_and_select_topics() {
             ("Unused.msg", "uint64 timestamp\n"),
         ],
     );
+    // `generate` asks cargo to watch the folder and each of its files.
+    let watched = Builder::new()
+        .msg_dir(&dir)
+        .format("x:uint8_t a;")
+        .watched_files()
+        .unwrap();
+    let mut expected = vec![dir.clone()];
+    for f in ["Attitude.msg", "Report.msg", "Status.msg", "Unused.msg"] {
+        expected.push(dir.join(f));
+    }
+    assert_eq!(watched, expected);
     // A nested type from another input (a format string), used by the folder.
     let types = Builder::new()
         .msg_dir_topics(&dir, &["estimator_attitude", "status"])
