@@ -512,3 +512,165 @@ fn streaming_memory_is_bounded() {
     assert!(rows > 100_000);
     assert!(most <= 512 * 1024, "the stream buffer grew to {most} bytes");
 }
+
+/// A log that bends every rule the reader tolerates: values that do not fit their keys, a
+/// blob split over continued parts, a key with a space, names outside the format grammar,
+/// names that are not UTF-8.
+fn odd_log() -> Vec<u8> {
+    use ulog_runtime::read::{FileHeader, FlagBits, KeyValue, Message};
+    let mut b = FileHeader {
+        version: 1,
+        start_timestamp: 0,
+    }
+    .to_bytes()
+    .to_vec();
+    let mut put = |m: Message<'_>| m.encode(&mut b).unwrap();
+    put(Message::FlagBits(FlagBits::default()));
+    let info = |key: &'static [u8], value: &'static [u8]| Message::Info(KeyValue { key, value });
+    put(info(b"char[11] Build Date", b"2024-03-18 "));
+    put(info(b"char[3] sys_name", b"PX4"));
+    put(info(b"uint8_t[64] short_blob", &[7; 10]));
+    put(info(b"char[5] n\xffame", b"v\xffal"));
+    let blob: &'static [u8] = Box::leak(
+        (0..=255u8)
+            .cycle()
+            .take(776)
+            .collect::<Vec<_>>()
+            .into_boxed_slice(),
+    );
+    for (i, part) in [&blob[..338], &blob[338..676], &blob[676..]]
+        .into_iter()
+        .enumerate()
+    {
+        put(Message::MultiInfo {
+            continued: i > 0,
+            entry: KeyValue {
+                key: b"uint8_t[1169] metadata_events",
+                value: part,
+            },
+        });
+    }
+    put(Message::Format(
+        b"gps.raw:uint64_t timestamp;float alt;int8_t x-y;",
+    ));
+    put(Message::Format(b"t\xffopic:uint64_t timestamp;uint16_t v;"));
+    put(Message::Subscribe {
+        multi_id: 0,
+        msg_id: 0,
+        name: b"gps.raw",
+    });
+    put(Message::Subscribe {
+        multi_id: 0,
+        msg_id: 1,
+        name: b"t\xffopic",
+    });
+    for t in 1..=3u64 {
+        let mut row = t.to_le_bytes().to_vec();
+        row.extend_from_slice(&(t as f32 * 1.5).to_le_bytes());
+        row.push(t as u8);
+        put(Message::Data {
+            msg_id: 0,
+            data: &row,
+        });
+        let mut row = t.to_le_bytes().to_vec();
+        row.extend_from_slice(&(t as u16 * 100).to_le_bytes());
+        put(Message::Data {
+            msg_id: 1,
+            data: &row,
+        });
+    }
+    b
+}
+
+#[test]
+fn odd_logs_keep_at_least_what_pyulog_keeps() {
+    use serde_json::Value as Json;
+    use ulog_runtime::{Scalar, Value};
+    let bytes = odd_log();
+    let log = Log::from_slice(&bytes).unwrap();
+    let dir = std::env::temp_dir().join(format!("ulog-odd-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("odd.ulg");
+    std::fs::write(&path, &bytes).unwrap();
+    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("py/dump_values.py");
+    let out = std::process::Command::new("python3")
+        .arg(&script)
+        .arg(&path)
+        .output();
+    std::fs::remove_dir_all(&dir).unwrap();
+    let Some(out) = out.ok().filter(|o| o.status.success()) else {
+        assert!(
+            !ulog_tests::under_ci(),
+            "under CI pyulog must be installed (.ci/run does it)"
+        );
+        eprintln!("pyulog not available: nothing compared");
+        return;
+    };
+    let p: Json = serde_json::from_slice(&out.stdout).unwrap();
+    let meta = log.metadata();
+    // Every info value pyulog has, ours has too: pyulog cuts a key at its second space
+    // (`Build` for `Build Date`); we keep the whole name.
+    for (key, theirs) in p["info"].as_object().unwrap() {
+        let ours = meta
+            .info()
+            .iter()
+            .find(|i| i.key == *key || i.key.starts_with(&format!("{key} ")))
+            .unwrap_or_else(|| panic!("info {key}"));
+        match theirs {
+            Json::String(text) => assert_eq!(ours.value.as_str(), Some(text.as_str()), "{key}"),
+            other => {
+                let hex: String = ours.raw.iter().map(|b| format!("{b:02x}")).collect();
+                assert_eq!(other["hex"].as_str(), Some(hex.as_str()), "{key}");
+            }
+        }
+    }
+    assert!(meta.info_value("Build Date").is_some());
+    // The blob's parts join to the bytes pyulog joins.
+    for (key, values) in p["info_multiple"].as_object().unwrap() {
+        let m = meta.multi_info().iter().find(|m| m.key == *key).unwrap();
+        for (i, parts) in values.as_array().unwrap().iter().enumerate() {
+            let theirs: String = parts
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|part| part["hex"].as_str().unwrap().to_owned())
+                .collect();
+            let ours: String = m
+                .joined(i)
+                .unwrap()
+                .iter()
+                .map(|b| format!("{b:02x}"))
+                .collect();
+            assert_eq!(ours, theirs, "{key} {i}");
+        }
+    }
+    // Every row of every topic pyulog reads, under its name, with every value.
+    let data = p["data"].as_object().unwrap();
+    assert_eq!(data.len(), 2, "{data:?}");
+    for (key, columns) in data {
+        let (topic, multi_id) = key.rsplit_once('/').unwrap();
+        let sub = log
+            .subscription(topic, multi_id.parse().unwrap())
+            .unwrap_or_else(|| panic!("{key}"));
+        for (col, values) in columns.as_object().unwrap() {
+            for (row, theirs) in log.rows(sub).zip(values.as_array().unwrap()) {
+                let Value::Struct(fields) = row.value().unwrap() else {
+                    panic!()
+                };
+                let ours = fields
+                    .iter()
+                    .find(|(n, _)| n == col)
+                    .unwrap()
+                    .1
+                    .as_scalar()
+                    .unwrap();
+                let theirs = theirs.as_f64().unwrap();
+                let ours = match ours {
+                    Scalar::Float(x) => f64::from(x),
+                    other => other.as_f64(),
+                };
+                assert_eq!(ours, theirs, "{key} {col}");
+            }
+        }
+    }
+}

@@ -153,7 +153,24 @@ pub enum DiagnosticKind {
     /// A second, different definition of a format; the first is kept.
     #[error("{0}; keeping the first")]
     Redefinition(Redefinition),
-    /// An `I`/`M`/`P`/`Q` key or value that cannot be decoded.
+    /// A format definition outside the grammar, kept under its names as pyulog reads it.
+    #[error("format definition `{text}` kept as it is: {notes}")]
+    OddFormat {
+        /// The definition.
+        text: String,
+        /// What is outside the grammar.
+        notes: String,
+    },
+    /// An `I`/`M`/`P`/`Q` key or value that does not follow the format, kept as far as it
+    /// goes (see [`Info`](crate::read::Info)).
+    #[error("`{key}`: {reason}")]
+    KeptValue {
+        /// The key text.
+        key: String,
+        /// What is odd and how the value is kept.
+        reason: String,
+    },
+    /// An `I`/`M`/`P`/`Q` key or value that cannot be decoded; it is left out.
     #[error("invalid `{key}` value: {reason}")]
     InvalidValue {
         /// The key text.

@@ -9,6 +9,7 @@
 //!   own definitions once, then decoded by offset reads ([`Log::topic`]) and written
 //!   ([`Writer::topic`]).
 //! - [`write`](mod@write): a [`Writer`] of version-1 files.
+//! - [`file_names`]: safe, unique file names for exports that write a file per topic.
 //!
 //! ```no_run
 //! # fn main() -> Result<(), ulog_runtime::ReadError> {
@@ -29,6 +30,7 @@ pub mod __private;
 #[cfg(feature = "codegen")]
 pub mod codegen;
 mod error;
+pub mod file_names;
 pub mod read;
 pub mod schema;
 pub mod typed;

@@ -151,6 +151,9 @@ pub enum Value {
     Array(Vec<Value>),
     /// A format's fields by name, in declaration order, padding left out.
     Struct(Vec<(String, Value)>),
+    /// Bytes without a type: an info value of a type that is not basic, or too short for its
+    /// type (a diagnostic says which).
+    Bytes(Vec<u8>),
 }
 
 impl Value {
@@ -236,6 +239,16 @@ impl fmt::Display for Value {
                 }
                 f.write_str("}")
             }
+            Value::Bytes(bytes) => {
+                f.write_str("<")?;
+                for (i, b) in bytes.iter().enumerate() {
+                    if i > 0 {
+                        f.write_str(" ")?;
+                    }
+                    write!(f, "{b:02x}")?;
+                }
+                f.write_str(">")
+            }
         }
     }
 }
@@ -280,6 +293,13 @@ impl serde::Serialize for Value {
                     map.serialize_entry(n, v)?;
                 }
                 map.end()
+            }
+            Value::Bytes(bytes) => {
+                let mut seq = s.serialize_seq(Some(bytes.len()))?;
+                for b in bytes {
+                    seq.serialize_element(b)?;
+                }
+                seq.end()
             }
         }
     }

@@ -785,3 +785,187 @@ fn a_closed_output_pipe_is_not_an_error() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+#[test]
+fn csv_file_names_stay_in_the_folder_and_never_collide_silently() {
+    use ulog_runtime::read::{FileHeader, FlagBits, Message};
+    let long = "x".repeat(300);
+    let names = [
+        "a/b",
+        "a_b",
+        "A_B",
+        "..",
+        "/etc/passwd",
+        "name with space",
+        long.as_str(),
+    ];
+    let mut bytes = FileHeader {
+        version: 1,
+        start_timestamp: 0,
+    }
+    .to_bytes()
+    .to_vec();
+    Message::FlagBits(FlagBits::default())
+        .encode(&mut bytes)
+        .unwrap();
+    for name in names {
+        let format = format!("{name}:uint64_t timestamp;");
+        Message::Format(format.as_bytes())
+            .encode(&mut bytes)
+            .unwrap();
+    }
+    for (i, name) in names.iter().enumerate() {
+        let msg_id = i as u16;
+        Message::Subscribe {
+            multi_id: 0,
+            msg_id,
+            name: name.as_bytes(),
+        }
+        .encode(&mut bytes)
+        .unwrap();
+        Message::Data {
+            msg_id,
+            data: &(i as u64).to_le_bytes(),
+        }
+        .encode(&mut bytes)
+        .unwrap();
+    }
+    let dir = temp_dir("names");
+    let log = dir.join("odd.ulg");
+    std::fs::write(&log, &bytes).unwrap();
+    let out_dir = dir.join("out");
+    let out = ulog(&[
+        "csv",
+        log.to_str().unwrap(),
+        "-o",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut written: Vec<String> = std::fs::read_dir(&out_dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    written.sort();
+    let shortened = written
+        .iter()
+        .find(|n| n.starts_with("odd_xxx"))
+        .unwrap()
+        .clone();
+    assert_eq!(shortened.len(), 255);
+    assert!(shortened.ends_with("_0.csv"), "{shortened}");
+    let mut expected = vec![
+        "odd_%2E%2E_0.csv".to_owned(),
+        "odd_A_B_0~3.csv".to_owned(),
+        "odd__etc_passwd_0.csv".to_owned(),
+        "odd_a_b_0.csv".to_owned(),
+        "odd_a_b_0~2.csv".to_owned(),
+        "odd_name%20with%20space_0.csv".to_owned(),
+        shortened,
+    ];
+    expected.sort();
+    assert_eq!(written, expected);
+    // Nothing outside the output folder, and every row is in its file.
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 2);
+    for name in &written {
+        let text = std::fs::read_to_string(out_dir.join(name)).unwrap();
+        assert_eq!(text.lines().count(), 2, "{name}");
+    }
+    let err = String::from_utf8(out.stderr).unwrap();
+    let l = log.display();
+    assert!(
+        err.contains(&format!(
+            "ulog: {l}: topics `a/b` and `a_b` map to one file name; `a_b` #0 goes to "
+        )),
+        "{err}"
+    );
+    assert!(
+        err.contains("topics `a/b` and `A_B` map to one file name"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn csv_says_what_it_skips() {
+    use ulog_runtime::read::{FileHeader, FlagBits, Message};
+    let mut bytes = FileHeader {
+        version: 1,
+        start_timestamp: 0,
+    }
+    .to_bytes()
+    .to_vec();
+    let mut put = |m: Message<'_>| m.encode(&mut bytes).unwrap();
+    put(Message::FlagBits(FlagBits::default()));
+    put(Message::Format(b"a:uint64_t timestamp;missing_type m;"));
+    put(Message::Subscribe {
+        multi_id: 0,
+        msg_id: 0,
+        name: b"a",
+    });
+    put(Message::Subscribe {
+        multi_id: 0,
+        msg_id: 1,
+        name: b"undefined",
+    });
+    put(Message::Data {
+        msg_id: 0,
+        data: &[0; 9],
+    });
+    put(Message::Data {
+        msg_id: 7,
+        data: &[0; 8],
+    });
+    let dir = temp_dir("skips");
+    let log = dir.join("unreadable.ulg");
+    std::fs::write(&log, &bytes).unwrap();
+    let out = ulog(&[
+        "csv",
+        log.to_str().unwrap(),
+        "-o",
+        dir.join("out").to_str().unwrap(),
+    ]);
+    assert!(out.status.success());
+    assert!(out.stdout.is_empty());
+    let l = log.display();
+    assert_eq!(
+        String::from_utf8(out.stderr).unwrap(),
+        format!(
+            "ulog: {l}: skipped topic `a` (msg_id 0): a.m: type `missing_type` is not a basic type and no format defines it\n\
+             ulog: {l}: skipped topic `undefined` (msg_id 1): no format named `undefined`\n\
+             ulog: {l}: skipped 1 row of msg_ids no subscription declares\n\
+             ulog: {l}: no CSV file written: no topic has rows that can be read\n"
+        )
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn info_names_a_version_1_file_without_flag_bits_and_an_absolute_start() {
+    use ulog_runtime::read::{FileHeader, Message};
+    let mut bytes = FileHeader {
+        version: 1,
+        start_timestamp: 1_710_773_350_346_000,
+    }
+    .to_bytes()
+    .to_vec();
+    Message::Format(b"t:uint64_t timestamp;")
+        .encode(&mut bytes)
+        .unwrap();
+    let dir = temp_dir("noflags");
+    let log = dir.join("noflags.ulg");
+    std::fs::write(&log, &bytes).unwrap();
+    let text = stdout(&["info", log.to_str().unwrap()]);
+    assert!(
+        text.contains("\nFlag bits:  none: a version-1 file without its flag bits message\n"),
+        "{text}"
+    );
+    assert!(
+        text.contains("start 475214:49:10 (1710773350346000 µs, an absolute time: 2024-03-18 14:49:10.346000 UTC)"),
+        "{text}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -41,6 +41,21 @@ impl FileHeader {
         })
     }
 
+    /// The start time as a UTC date, if it is one: some writers put an absolute Unix time in
+    /// microseconds here instead of the time since boot (taken as such from the year 2000 on).
+    ///
+    /// ```
+    /// use ulog_runtime::read::FileHeader;
+    /// let h = FileHeader { version: 1, start_timestamp: 1_710_773_350_346_000 };
+    /// assert_eq!(h.start_utc().unwrap().to_string(), "2024-03-18 14:49:10.346000 UTC");
+    /// assert!(FileHeader { version: 1, start_timestamp: 104_889_396 }.start_utc().is_none());
+    /// ```
+    pub fn start_utc(&self) -> Option<UtcTime> {
+        // 2000-01-01T00:00:00Z in µs: boot times (days at most) are far below it.
+        const Y2000_US: u64 = 946_684_800_000_000;
+        (self.start_timestamp >= Y2000_US).then(|| UtcTime::from_unix_us(self.start_timestamp))
+    }
+
     /// The header as written to a file.
     pub fn to_bytes(&self) -> [u8; HEADER_LEN] {
         let mut out = [0; HEADER_LEN];
@@ -48,6 +63,63 @@ impl FileHeader {
         out[7] = self.version;
         out[8..].copy_from_slice(&self.start_timestamp.to_le_bytes());
         out
+    }
+}
+
+/// A UTC date and time to the microsecond, from a Unix time ([`FileHeader::start_utc`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub struct UtcTime {
+    /// Year.
+    pub year: i64,
+    /// Month, 1 to 12.
+    pub month: u8,
+    /// Day of the month, 1 to 31.
+    pub day: u8,
+    /// Hour.
+    pub hour: u8,
+    /// Minute.
+    pub minute: u8,
+    /// Second.
+    pub second: u8,
+    /// Microseconds within the second.
+    pub micros: u32,
+}
+
+impl UtcTime {
+    /// The date of a Unix time in microseconds (proleptic Gregorian calendar).
+    pub fn from_unix_us(us: u64) -> UtcTime {
+        let secs = us / 1_000_000;
+        let days = i64::try_from(secs / 86_400).expect("u64 seconds / 86400 fits i64");
+        let rem = secs % 86_400;
+        // Days to a civil date (Howard Hinnant's algorithm).
+        let z = days + 719_468;
+        let era = z.div_euclid(146_097);
+        let doe = z.rem_euclid(146_097);
+        let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+        let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+        let mp = (5 * doy + 2) / 153;
+        let day = (doy - (153 * mp + 2) / 5 + 1) as u8;
+        let month = if mp < 10 { mp + 3 } else { mp - 9 } as u8;
+        let year = yoe + era * 400 + i64::from(month <= 2);
+        UtcTime {
+            year,
+            month,
+            day,
+            hour: (rem / 3600) as u8,
+            minute: (rem / 60 % 60) as u8,
+            second: (rem % 60) as u8,
+            micros: (us % 1_000_000) as u32,
+        }
+    }
+}
+
+impl std::fmt::Display for UtcTime {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{:04}-{:02}-{:02} {:02}:{:02}:{:02}.{:06} UTC",
+            self.year, self.month, self.day, self.hour, self.minute, self.second, self.micros
+        )
     }
 }
 

@@ -9,12 +9,16 @@ use crate::value::{RowPlan, Value};
 /// An `I` message: a typed, named value. Keys are unique; a later `I` replaces the value.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Info {
-    /// The name, e.g. `sys_name`.
+    /// The name, e.g. `sys_name` (all of it, even with characters the key grammar does not
+    /// allow, such as `Build Date`).
     pub key: String,
     /// The declared type, e.g. `char[3]` or `uint32_t`.
     pub type_name: String,
-    /// The value.
+    /// The value: typed as far as the bytes fit the type ([`Value::Bytes`] where they do
+    /// not; a diagnostic says so).
     pub value: Value,
+    /// The value's bytes as the file has them.
+    pub raw: Vec<u8>,
 }
 
 /// All `M` messages of one key: each list is one value and its continuations, in file order.
@@ -26,6 +30,16 @@ pub struct MultiInfo {
     pub type_name: String,
     /// One entry per value; each holds the value's parts (the first and its continuations).
     pub values: Vec<Vec<Value>>,
+    /// The bytes of each part as the file has them, in the shape of `values`.
+    pub raw: Vec<Vec<Vec<u8>>>,
+}
+
+impl MultiInfo {
+    /// The `i`-th value's parts joined, as the file has them: e.g. a compressed blob split
+    /// over continued messages (PX4's `metadata_events`), joined as pyulog joins it.
+    pub fn joined(&self, i: usize) -> Option<Vec<u8>> {
+        self.raw.get(i).map(|parts| parts.concat())
+    }
 }
 
 /// A parameter value: parameters are `int32_t` or `float`.
@@ -185,8 +199,10 @@ pub struct LoggedMessage {
     pub tag: Option<u16>,
     /// Microseconds.
     pub timestamp: u64,
-    /// The text (lossy UTF-8).
+    /// The text; invalid UTF-8 is left out, as pyulog leaves it out.
     pub text: String,
+    /// Whether the text was valid UTF-8 (pyulog's tools fail on it without `-i`).
+    pub valid_utf8: bool,
     /// File offset of the message.
     pub offset: u64,
 }
@@ -490,57 +506,69 @@ impl Metadata {
                 self.flag_bits = Some(bits);
                 Ok(Applied::Nothing)
             }
-            Message::Format(text) => {
-                let text = match std::str::from_utf8(text) {
-                    Ok(t) => t,
-                    Err(_) => return diag(invalid_utf8("format definition", text)),
+            Message::Format(bytes) => {
+                // As pyulog reads it: invalid UTF-8 left out, names outside the grammar kept.
+                let (text, valid) = text_of(bytes);
+                let strict = Format::parse(&text).map(|f| (f, Vec::new()));
+                let (format, mut notes) = match strict.or_else(|_| Format::parse_lax(&text)) {
+                    Ok(x) => x,
+                    Err(error) => return diag(DiagnosticKind::InvalidFormat { text, error }),
                 };
-                match Format::parse(text) {
-                    Err(error) => diag(DiagnosticKind::InvalidFormat {
-                        text: text.to_owned(),
-                        error,
-                    }),
-                    Ok(format) => match self.schema.insert(format) {
-                        Ok(_) => Ok(Applied::Nothing),
-                        Err(e) => diag(DiagnosticKind::Redefinition(e)),
-                    },
+                if !valid {
+                    notes.insert(0, "not UTF-8 (the invalid bytes are left out)".to_owned());
+                }
+                if let Err(e) = self.schema.insert(format) {
+                    return diag(DiagnosticKind::Redefinition(e));
+                }
+                if notes.is_empty() {
+                    Ok(Applied::Nothing)
+                } else {
+                    diag(DiagnosticKind::OddFormat {
+                        text,
+                        notes: notes.join("; "),
+                    })
                 }
             }
             Message::Info(kv) => {
-                let (field, type_name, value) = match typed_value(kv) {
-                    Ok(x) => x,
-                    Err(kind) => return diag(kind),
-                };
-                match self.info.iter_mut().find(|i| i.key == field.name) {
+                let d = decode_key_value(kv);
+                let problem = d.problem();
+                match self.info.iter_mut().find(|i| i.key == d.name) {
                     Some(existing) => {
-                        existing.type_name = type_name;
-                        existing.value = value;
+                        existing.type_name = d.type_name;
+                        existing.value = d.value;
+                        existing.raw = d.raw;
                     }
                     None => self.info.push(Info {
-                        key: field.name,
-                        type_name,
-                        value,
+                        key: d.name,
+                        type_name: d.type_name,
+                        value: d.value,
+                        raw: d.raw,
                     }),
                 }
-                Ok(Applied::Nothing)
+                problem.map_or(Ok(Applied::Nothing), diag)
             }
             Message::MultiInfo { continued, entry } => {
-                let (field, type_name, value) = match typed_value(entry) {
-                    Ok(x) => x,
-                    Err(kind) => return diag(kind),
-                };
-                match self.multi_info.iter_mut().find(|m| m.key == field.name) {
-                    Some(m) => match m.values.last_mut() {
-                        Some(last) if continued => last.push(value),
-                        _ => m.values.push(vec![value]),
+                let d = decode_key_value(entry);
+                let problem = d.problem();
+                match self.multi_info.iter_mut().find(|m| m.key == d.name) {
+                    Some(m) => match (m.values.last_mut(), m.raw.last_mut()) {
+                        (Some(last), Some(raw)) if continued => {
+                            last.push(d.value);
+                            raw.push(d.raw);
+                        }
+                        _ => {
+                            m.values.push(vec![d.value]);
+                            m.raw.push(vec![d.raw]);
+                        }
                     },
                     None => self.multi_info.push(MultiInfo {
-                        key: field.name,
-                        type_name,
-                        values: vec![vec![value]],
+                        key: d.name,
+                        type_name: d.type_name,
+                        values: vec![vec![d.value]],
+                        raw: vec![vec![d.raw]],
                     }),
                 }
-                Ok(Applied::Nothing)
+                problem.map_or(Ok(Applied::Nothing), diag)
             }
             Message::Parameter(kv) => {
                 let (name, value) = match param_value(kv) {
@@ -599,11 +627,13 @@ impl Metadata {
                 text,
             } => {
                 self.in_data_section = true;
+                let (text, valid) = text_of(text);
                 Ok(Applied::Logged(LoggedMessage {
                     level_byte: level,
                     tag,
                     timestamp,
-                    text: String::from_utf8_lossy(text).into_owned(),
+                    text,
+                    valid_utf8: valid,
                     offset,
                 }))
             }
@@ -634,11 +664,8 @@ impl Metadata {
         msg_id: u16,
         name: &[u8],
     ) -> Result<Applied, ReadError> {
-        let diag = |kind| Ok(Applied::Diagnostic(Diagnostic { offset, kind }));
-        let name = match std::str::from_utf8(name) {
-            Ok(n) => n.to_owned(),
-            Err(_) => return diag(invalid_utf8("subscription name", name)),
-        };
+        // As the format's name: invalid UTF-8 left out (reported when the format was read).
+        let (name, _) = text_of(name);
         let mut sub = Subscription {
             msg_id,
             multi_id,
@@ -795,58 +822,139 @@ impl Metadata {
     }
 }
 
-fn invalid_utf8(what: &'static str, bytes: &[u8]) -> DiagnosticKind {
-    DiagnosticKind::InvalidUtf8 {
-        what,
-        text: String::from_utf8_lossy(bytes).into_owned(),
+/// Text as pyulog decodes it (`errors='ignore'`): invalid UTF-8 sequences left out; `false`
+/// if there were any.
+pub(crate) fn text_of(bytes: &[u8]) -> (String, bool) {
+    match std::str::from_utf8(bytes) {
+        Ok(t) => (t.to_owned(), true),
+        Err(_) => (bytes.utf8_chunks().map(|c| c.valid()).collect(), false),
     }
 }
 
-/// Decodes the key and value of an `I`/`M`/`P`/`Q` message.
-fn typed_value(kv: KeyValue<'_>) -> Result<(Field, String, Value), DiagnosticKind> {
-    let key = std::str::from_utf8(kv.key).map_err(|_| invalid_utf8("info key", kv.key))?;
-    let invalid = |reason: String| DiagnosticKind::InvalidValue {
-        key: key.to_owned(),
-        reason,
+/// The key and value of an `I`/`M`/`P`/`Q` message, decoded as far as they can be.
+struct Decoded {
+    name: String,
+    type_name: String,
+    value: Value,
+    raw: Vec<u8>,
+    key_text: String,
+    problems: Vec<String>,
+}
+
+impl Decoded {
+    /// A diagnostic if anything was odd (the value is kept either way).
+    fn problem(&self) -> Option<DiagnosticKind> {
+        (!self.problems.is_empty()).then(|| DiagnosticKind::KeptValue {
+            key: self.key_text.clone(),
+            reason: self.problems.join("; "),
+        })
+    }
+}
+
+/// Decodes the key and value of an `I`/`M`/`P`/`Q` message, keeping what is there: a key
+/// outside the grammar keeps its whole name, a value that does not fit its type is typed
+/// as far as it fits (or kept as bytes), and each oddity is noted.
+fn decode_key_value(kv: KeyValue<'_>) -> Decoded {
+    let (key_text, key_valid) = text_of(kv.key);
+    let mut problems = Vec::new();
+    if !key_valid {
+        problems.push("the key is not UTF-8 (the invalid bytes are left out)".to_owned());
+    }
+    let raw = kv.value.to_vec();
+    // The type, if basic, and the element count; the name.
+    let (type_name, name, ty) = match Field::parse_key(&key_text) {
+        Ok(field) => (field_type_name(&field), field.name.clone(), basic(&field)),
+        Err(_) => match key_text.split_once(' ') {
+            Some((ty, name)) if !name.is_empty() => {
+                problems.push(format!(
+                    "the name `{name}` is outside the key grammar (kept whole)"
+                ));
+                let ty_field = Field::parse_key(&format!("{ty} k")).ok();
+                (
+                    ty.to_owned(),
+                    name.to_owned(),
+                    ty_field.as_ref().and_then(basic),
+                )
+            }
+            _ => {
+                problems.push("the key has no type".to_owned());
+                (String::new(), key_text.clone(), None)
+            }
+        },
     };
-    let field = Field::parse_key(key).map_err(|e| invalid(e.to_string()))?;
-    let TypeRef::Primitive(p) = field.ty else {
-        return Err(invalid(format!("`{}` is not a basic type", field.ty)));
-    };
-    let type_name = match field.array_len {
-        Some(n) => format!("{p}[{n}]"),
-        None => p.to_string(),
-    };
-    let value = if p == Primitive::Char && field.array_len.is_some() {
-        // The text is the whole value, whatever length the key declares (as pyulog reads it).
-        Value::String(String::from_utf8_lossy(kv.value).into_owned())
-    } else {
-        let expected = field.count() * p.size();
-        if kv.value.len() != expected {
-            return Err(invalid(format!(
-                "{} value bytes, the type needs {expected}",
-                kv.value.len()
-            )));
+    let value = match ty {
+        None => {
+            if !type_name.is_empty() {
+                problems.push(format!(
+                    "`{type_name}` is not a basic type; the value is kept as bytes"
+                ));
+            }
+            Value::Bytes(raw.clone())
         }
-        Value::decode_primitive(p, field.array_len.map(usize::from), kv.value, false)
-            .ok_or_else(|| invalid("undecodable".to_owned()))?
+        Some((Primitive::Char, Some(_))) => {
+            // The text is the whole value, whatever length the key declares (as pyulog reads it).
+            let (text, valid) = text_of(&raw);
+            if !valid {
+                problems.push("the text is not UTF-8 (the invalid bytes are left out)".to_owned());
+            }
+            Value::String(text)
+        }
+        Some((p, count)) => {
+            let expected = count.unwrap_or(1) * p.size();
+            if raw.len() != expected {
+                problems.push(format!(
+                    "{} value bytes, the type needs {expected}; kept as they are",
+                    raw.len()
+                ));
+            }
+            let whole = raw.len() / p.size();
+            let decoded = match count {
+                None if whole >= 1 => Value::decode_primitive(p, None, &raw, false),
+                None => None,
+                Some(_) => Value::decode_primitive(p, Some(whole), &raw, false),
+            };
+            decoded.unwrap_or_else(|| Value::Bytes(raw.clone()))
+        }
     };
-    Ok((field, type_name, value))
+    Decoded {
+        name,
+        type_name,
+        value,
+        raw,
+        key_text,
+        problems,
+    }
+}
+
+/// `char[3]`, `uint32_t`: the type part of a key.
+fn field_type_name(field: &Field) -> String {
+    match field.array_len {
+        Some(n) => format!("{}[{n}]", field.ty),
+        None => field.ty.to_string(),
+    }
+}
+
+/// The basic type and array length of a key's field, if its type is basic.
+fn basic(field: &Field) -> Option<(Primitive, Option<usize>)> {
+    match field.ty {
+        TypeRef::Primitive(p) => Some((p, field.array_len.map(usize::from))),
+        TypeRef::Nested(_) => None,
+    }
 }
 
 fn param_value(kv: KeyValue<'_>) -> Result<(String, ParamValue), DiagnosticKind> {
-    let (field, type_name, value) = typed_value(kv)?;
-    let value = match value {
+    let d = decode_key_value(kv);
+    let value = match d.value {
         Value::Scalar(crate::value::Scalar::Int32(v)) => ParamValue::Int32(v),
         Value::Scalar(crate::value::Scalar::Float(v)) => ParamValue::Float(v),
         _ => {
             return Err(DiagnosticKind::InvalidValue {
-                key: format!("{type_name} {}", field.name),
+                key: d.key_text,
                 reason: "parameters are int32_t or float".to_owned(),
             });
         }
     };
-    Ok((field.name, value))
+    Ok((d.name, value))
 }
 
 #[cfg(test)]

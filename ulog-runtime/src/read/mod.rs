@@ -13,13 +13,14 @@ pub use log::{DataRows, Log, Rows, Summary, fold_rows, summarize};
 pub use message::{
     FLAG_BITS_LEN, FileHeader, FlagBits, HEADER_LEN, KNOWN_VERSION, KeyValue, MAGIC,
     MESSAGE_HEADER_LEN, MalformedMessage, Message, MessageTooLarge, MessageType, SYNC_MAGIC,
+    UtcTime,
 };
 pub use metadata::{
     DefaultParameter, Dropout, Info, LogLevel, LoggedMessage, Metadata, MultiInfo, ParamValue,
     Parameter, ParameterChange, Subscription, VersionInfo,
 };
 pub use stream::{Event, StreamReader};
-pub use topics::TopicSummary;
+pub use topics::{Skipped, TopicSummary};
 
 use crate::error::{Diagnostic, DiagnosticKind, ReadError};
 use crate::schema::Schema;

@@ -79,3 +79,65 @@ impl Log<'_> {
         out
     }
 }
+
+/// What reading left out of a log ([`Log::skipped`]), for tools that export it to say so.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Skipped {
+    /// Subscriptions whose rows cannot be decoded: topic, `msg_id`, why.
+    pub unreadable_topics: Vec<(String, u16, String)>,
+    /// Rows whose size does not fit their format, per topic instance: topic, `multi_id`,
+    /// rows.
+    pub misfit_rows: Vec<(String, u8, usize)>,
+    /// Rows for a `msg_id` no subscription declares.
+    pub orphan_rows: usize,
+    /// Messages of unknown types, and other messages that could not be used.
+    pub unusable_messages: usize,
+    /// Bytes skipped as damaged (truncated tails included).
+    pub damaged_bytes: u64,
+}
+
+impl Skipped {
+    /// Whether nothing was left out.
+    pub fn is_empty(&self) -> bool {
+        *self == Skipped::default()
+    }
+}
+
+impl Log<'_> {
+    /// What was left out while reading, from [`Log::diagnostics`], grouped as an export
+    /// reports it.
+    pub fn skipped(&self) -> Skipped {
+        use crate::DiagnosticKind as K;
+        let mut out = Skipped {
+            damaged_bytes: self.corrupt_ranges().map(|r| r.end - r.start).sum(),
+            ..Skipped::default()
+        };
+        for d in self.diagnostics() {
+            match &d.kind {
+                K::BadSubscription {
+                    topic,
+                    msg_id,
+                    error,
+                } => out
+                    .unreadable_topics
+                    .push((topic.clone(), *msg_id, error.to_string())),
+                K::PayloadSize {
+                    topic, multi_id, ..
+                } => match out
+                    .misfit_rows
+                    .iter_mut()
+                    .find(|(t, m, _)| t == topic && m == multi_id)
+                {
+                    Some(entry) => entry.2 += 1,
+                    None => out.misfit_rows.push((topic.clone(), *multi_id, 1)),
+                },
+                K::UnknownMsgId { .. } => out.orphan_rows += 1,
+                K::UnknownMessageType { .. } | K::Malformed(_) | K::InvalidFormat { .. } => {
+                    out.unusable_messages += 1;
+                }
+                _ => {}
+            }
+        }
+        out
+    }
+}

@@ -147,6 +147,67 @@ impl Format {
         })
     }
 
+    /// Parses a format as a reader must take what writers produce: the grammar of
+    /// [`Format::parse`], except that the message name may hold any character but `:`, a
+    /// field name any but `;`, a type name any but ` ` and `[`, and empty fields (`;;`)
+    /// are skipped, as pyulog takes them. Returns the format and, for each name outside the
+    /// grammar, a note saying so; array lengths, missing names and duplicates are still
+    /// errors.
+    ///
+    /// ```
+    /// use ulog_runtime::schema::Format;
+    /// assert!(Format::parse("gps.raw:uint64_t timestamp;").is_err());
+    /// let (f, notes) = Format::parse_lax("gps.raw:uint64_t timestamp;float alt m;").unwrap();
+    /// assert_eq!((f.name.as_str(), f.fields[1].name.as_str()), ("gps.raw", "alt m"));
+    /// assert_eq!(notes.len(), 2);
+    /// ```
+    pub fn parse_lax(s: &str) -> Result<(Format, Vec<String>), FormatError> {
+        let Some(colon) = s.find(':') else {
+            return Err(FormatError::new(s.len(), FormatErrorKind::MissingColon));
+        };
+        let name = &s[..colon];
+        if name.is_empty() {
+            return Err(FormatError::new(0, FormatErrorKind::EmptyName));
+        }
+        let mut notes = Vec::new();
+        if let Err(e) = check_message_name(name, 0) {
+            notes.push(format!("message name `{name}`: {}", e.kind));
+        }
+        let mut fields: Vec<Field> = Vec::new();
+        let mut pos = colon + 1;
+        for part in s[colon + 1..].split(';') {
+            let start = pos;
+            pos += part.len() + 1;
+            if part.is_empty() {
+                continue;
+            }
+            let field = parse_field(part, start, Syntax::Lax)?;
+            if let Err(e) = check_type_name(field.ty.name(), start) {
+                notes.push(format!("type `{}`: {}", field.ty, e.kind));
+            }
+            if let Err(e) = check_field_name(&field.name, start) {
+                notes.push(format!("field name `{}`: {}", field.name, e.kind));
+            }
+            if fields.iter().any(|f| f.name == field.name) {
+                return Err(FormatError::new(
+                    start,
+                    FormatErrorKind::DuplicateField(field.name),
+                ));
+            }
+            fields.push(field);
+        }
+        if fields.is_empty() {
+            return Err(FormatError::new(s.len(), FormatErrorKind::NoFields));
+        }
+        Ok((
+            Format {
+                name: name.to_owned(),
+                fields,
+            },
+            notes,
+        ))
+    }
+
     /// The field with this name.
     pub fn field(&self, name: &str) -> Option<&Field> {
         self.fields.iter().find(|f| f.name == name)
@@ -298,6 +359,8 @@ pub fn check_field_name(name: &str, base: usize) -> Result<(), FormatError> {
 enum Syntax {
     Format,
     Key,
+    /// What writers produce: any type and field name (checked, noted by the caller).
+    Lax,
 }
 
 /// Parses `type name` / `type[N] name`; `base` is the byte position of `s` in the whole string.
@@ -310,7 +373,9 @@ fn parse_field(s: &str, base: usize, syntax: Syntax) -> Result<Field, FormatErro
     if type_name.is_empty() {
         return Err(FormatError::new(base, FormatErrorKind::EmptyType));
     }
-    check_type_name(type_name, base)?;
+    if syntax != Syntax::Lax {
+        check_type_name(type_name, base)?;
+    }
     let mut pos = type_end;
     let mut array_len = None;
     if s[pos..].starts_with('[') {
@@ -341,7 +406,7 @@ fn parse_field(s: &str, base: usize, syntax: Syntax) -> Result<Field, FormatErro
             trimmed.parse::<u32>().ok().or(Some(0))
         };
         match len {
-            Some(0) if syntax == Syntax::Format => {
+            Some(0) if syntax != Syntax::Key => {
                 return Err(FormatError::new(
                     base + digits_start,
                     FormatErrorKind::ZeroArrayLength,
@@ -364,6 +429,13 @@ fn parse_field(s: &str, base: usize, syntax: Syntax) -> Result<Field, FormatErro
     let name = &s[pos..];
     match syntax {
         Syntax::Format => check_field_name(name, base + pos)?,
+        Syntax::Lax if name.is_empty() => {
+            return Err(FormatError::new(
+                base + pos,
+                FormatErrorKind::EmptyFieldName,
+            ));
+        }
+        Syntax::Lax => {}
         Syntax::Key => {
             if name.is_empty() {
                 return Err(FormatError::new(

@@ -611,6 +611,10 @@ fn key_value(key: &str, value: &Value) -> Result<(String, Vec<u8>), WriteError> 
             }
             format!("{}[{}]", primitive.unwrap_or(Primitive::UInt8), items.len())
         }
+        Value::Bytes(raw) => {
+            bytes.extend_from_slice(raw);
+            format!("uint8_t[{}]", raw.len())
+        }
         Value::Struct(_) => return Err(invalid("info values are basic values, arrays or text")),
     };
     Ok((format!("{ty} {key}"), bytes))

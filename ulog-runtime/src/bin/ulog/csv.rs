@@ -43,15 +43,45 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         end_us: args.end.map(|s| s * 1e6),
     };
     let mut progress = Progress::new(log.row_count(), log.bytes().len());
-    let written = write_all(&log, &args.file, &options, &mut progress).map_err(|e| Failure {
-        path: e.path.or_else(|| Some(args.file.clone())),
-        ..e
-    })?;
-    for (path, rows) in written {
+    let written = write_all(&log, &args.file, &options, &mut progress)?;
+    progress.done();
+    for (path, rows) in &written {
         writeln!(out, "{} ({rows} rows)", path.display())?;
     }
-    progress.done();
+    report_skipped(&log, &args.file, &args.messages, written.is_empty());
     Ok(())
+}
+
+/// Says on stderr what the export left out, so that nothing is skipped silently.
+fn report_skipped(log: &Log<'_>, file: &Path, topics: &[String], nothing_written: bool) {
+    let wanted = |t: &str| topics.is_empty() || topics.iter().any(|w| w == t);
+    let skipped = log.skipped();
+    let say = |what: String| eprintln!("ulog: {}: {what}", file.display());
+    for (topic, msg_id, why) in skipped.unreadable_topics.iter().filter(|t| wanted(&t.0)) {
+        say(format!("skipped topic `{topic}` (msg_id {msg_id}): {why}"));
+    }
+    for (topic, multi_id, rows) in skipped.misfit_rows.iter().filter(|t| wanted(&t.0)) {
+        say(format!(
+            "skipped {rows} row{} of `{topic}` #{multi_id} whose size does not fit the format",
+            if *rows == 1 { "" } else { "s" }
+        ));
+    }
+    if skipped.orphan_rows > 0 && topics.is_empty() {
+        say(format!(
+            "skipped {} row{} of msg_ids no subscription declares",
+            skipped.orphan_rows,
+            if skipped.orphan_rows == 1 { "" } else { "s" }
+        ));
+    }
+    if skipped.damaged_bytes > 0 {
+        say(format!(
+            "{} damaged bytes skipped (`ulog info -v` lists where)",
+            skipped.damaged_bytes
+        ));
+    }
+    if nothing_written {
+        say("no CSV file written: no topic has rows that can be read".to_owned());
+    }
 }
 
 struct Options {
@@ -208,25 +238,35 @@ fn write_all(
         .to_owned();
     let dir = match &options.output {
         Some(d) => {
-            std::fs::create_dir_all(d)?;
+            std::fs::create_dir_all(d).map_err(|e| Failure::at(d, e))?;
             d.clone()
         }
         None => file.parent().map(Path::to_owned).unwrap_or_default(),
     };
     let schema = log.metadata().schema();
     let mut written = Vec::new();
+    let mut names = ulog_runtime::file_names::FileNames::new();
+    let prefix = format!("{stem}_");
     for group in selected(log, &options.topics) {
         let sub = group[0];
         let id = sub.format().expect("selected subscriptions have formats");
         let cols = columns(schema, id);
-        let path = dir.join(format!(
-            "{stem}_{}_{}.csv",
-            sub.name.replace('/', "_"),
-            sub.multi_id
-        ));
-        let mut out = std::io::BufWriter::new(std::fs::File::create(&path)?);
+        let name = names.unique(&prefix, &sub.name, &format!("_{}.csv", sub.multi_id));
+        let path = dir.join(&name.file_name);
+        if let Some(other) = name.collided_with {
+            eprintln!(
+                "ulog: {}: topics `{other}` and `{}` map to one file name; `{}` #{} goes to {}",
+                file.display(),
+                sub.name,
+                sub.name,
+                sub.multi_id,
+                path.display()
+            );
+        }
+        let io = |e| Failure::at(&path, e);
+        let mut out = std::io::BufWriter::new(std::fs::File::create(&path).map_err(io)?);
         let header: Vec<&str> = cols.iter().map(Column::name).collect();
-        writeln!(out, "{}", header.join(&options.delimiter))?;
+        writeln!(out, "{}", header.join(&options.delimiter)).map_err(io)?;
         let mut line = String::new();
         let mut count = 0;
         let rows = group.iter().flat_map(|s| log.rows(s));
@@ -266,10 +306,10 @@ fn write_all(
                 }
             }
             line.push('\n');
-            out.write_all(line.as_bytes())?;
+            out.write_all(line.as_bytes()).map_err(io)?;
             count += 1;
         }
-        out.flush()?;
+        out.flush().map_err(io)?;
         written.push((path, count));
     }
     Ok(written)

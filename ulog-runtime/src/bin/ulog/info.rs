@@ -99,8 +99,12 @@ fn info(log: &Log<'_>, file: &Path, verbose: bool, out: &mut impl Write) -> Resu
     let duration = meta.last_timestamp().saturating_sub(start);
     writeln!(
         out,
-        "Logging:    start {} ({start} µs), duration {} ({:.3} s)",
+        "Logging:    start {} ({start} µs{}), duration {} ({:.3} s)",
         hms(start),
+        header
+            .start_utc()
+            .map(|t| format!(", an absolute time: {t}"))
+            .unwrap_or_default(),
         hms(duration),
         duration as f64 / 1e6
     )?;
@@ -124,7 +128,12 @@ fn info(log: &Log<'_>, file: &Path, verbose: bool, out: &mut impl Write) -> Resu
                 .map(|o| format!(", at {o}"))
                 .collect::<String>()
         )?,
-        None => writeln!(out, "Flag bits:  none (a version-0 file)")?,
+        None if header.version == 0 => writeln!(out, "Flag bits:  none (a version-0 file)")?,
+        None => writeln!(
+            out,
+            "Flag bits:  none: a version-{} file without its flag bits message",
+            header.version
+        )?,
     }
     let dropouts: Vec<u64> = log
         .dropouts()

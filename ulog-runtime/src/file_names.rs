@@ -1,0 +1,193 @@
+//! File names from the names a log gives (topics), for exports that write a file per topic
+//! (`ulog csv`, Parquet): a log's names can never write outside the output folder, never
+//! collide silently, and never make a file name the system refuses.
+//!
+//! The mapping of a name to a file name part ([`component`]):
+//! - `A-Z a-z 0-9 _ -` are kept and `/` becomes `_` (as pyulog's `ulog2csv` does, so names
+//!   of the format grammar give pyulog's file names);
+//! - every other byte of the name's UTF-8 (`.`, space, `%`, `\`, NUL, non-ASCII...) becomes
+//!   `%XX`, its hexadecimal value: `..` is `%2E%2E`, so no name is `.` or `..` or holds a
+//!   path separator;
+//! - a file name longer than 255 bytes (the limit of common file systems) keeps the start of
+//!   the name and ends it with `~` and 16 hexadecimal digits of a hash of the whole name.
+//!
+//! [`FileNames`] makes the names of one folder unique, comparing them without regard to
+//! case (as macOS and Windows do): a second name that maps to a taken file name gets `~2`
+//! (then `~3`...) before its extension, and the caller is told, to report it.
+
+use std::collections::HashMap;
+
+/// Longest file name the common file systems take, in bytes.
+pub const MAX_FILE_NAME: usize = 255;
+
+/// The file name part that stands for `name` (see the [module docs](self)).
+///
+/// ```
+/// use ulog_runtime::file_names::component;
+/// assert_eq!(component("vehicle_attitude"), "vehicle_attitude");
+/// assert_eq!(component("sensors/gyro"), "sensors_gyro");
+/// assert_eq!(component(".."), "%2E%2E");
+/// assert_eq!(component("a b\0é"), "a%20b%00%C3%A9");
+/// ```
+pub fn component(name: &str) -> String {
+    let mut out = String::with_capacity(name.len());
+    for b in name.bytes() {
+        match b {
+            b'A'..=b'Z' | b'a'..=b'z' | b'0'..=b'9' | b'_' | b'-' => out.push(char::from(b)),
+            b'/' => out.push('_'),
+            _ => out.push_str(&format!("%{b:02X}")),
+        }
+    }
+    out
+}
+
+/// 64-bit FNV-1a: a stable hash for shortened names (the same name, the same file name, on
+/// every machine and run).
+fn fnv1a(name: &str) -> u64 {
+    name.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+/// `prefix + component(name) + suffix`, shortened as the [module docs](self) say when it is
+/// longer than [`MAX_FILE_NAME`] bytes.
+///
+/// ```
+/// use ulog_runtime::file_names::{file_name, MAX_FILE_NAME};
+/// assert_eq!(file_name("log_", "gps", "_0.csv"), "log_gps_0.csv");
+/// let long = file_name("log_", &"x".repeat(400), "_0.csv");
+/// assert_eq!(long.len(), MAX_FILE_NAME);
+/// assert!(long.starts_with("log_xxx") && long.ends_with("_0.csv"));
+/// ```
+pub fn file_name(prefix: &str, name: &str, suffix: &str) -> String {
+    let part = component(name);
+    if prefix.len() + part.len() + suffix.len() <= MAX_FILE_NAME {
+        return format!("{prefix}{part}{suffix}");
+    }
+    let tag = format!("~{:016x}", fnv1a(name));
+    let room = MAX_FILE_NAME.saturating_sub(prefix.len() + suffix.len() + tag.len());
+    // `part` is ASCII: any byte is a character boundary. A prefix longer than a file name
+    // is the caller's (a log's own file name); it is kept.
+    format!("{prefix}{}{tag}{suffix}", &part[..room.min(part.len())])
+}
+
+/// The file names of one output folder, unique without regard to case.
+#[derive(Debug, Default, Clone)]
+pub struct FileNames {
+    /// Lower-cased file name -> the name it was made for.
+    taken: HashMap<String, String>,
+}
+
+/// A file name made by [`FileNames::unique`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct UniqueName {
+    /// The file name.
+    pub file_name: String,
+    /// When the first choice was taken: the name that took it.
+    pub collided_with: Option<String>,
+}
+
+impl FileNames {
+    /// No names taken.
+    pub fn new() -> FileNames {
+        FileNames::default()
+    }
+
+    /// A file name for `name` ([`file_name`]), made unique in this folder: `~2`, `~3`... go
+    /// before the extension (the last `.` of `suffix`) when the file name is taken.
+    ///
+    /// ```
+    /// use ulog_runtime::file_names::FileNames;
+    /// let mut names = FileNames::new();
+    /// assert_eq!(names.unique("log_", "a/b", "_0.csv").file_name, "log_a_b_0.csv");
+    /// let second = names.unique("log_", "a_b", "_0.csv");
+    /// assert_eq!(second.file_name, "log_a_b_0~2.csv");
+    /// assert_eq!(second.collided_with.as_deref(), Some("a/b"));
+    /// assert_eq!(names.unique("log_", "A_B", "_0.csv").file_name, "log_A_B_0~3.csv");
+    /// ```
+    pub fn unique(&mut self, prefix: &str, name: &str, suffix: &str) -> UniqueName {
+        let first = file_name(prefix, name, suffix);
+        let collided_with = self.taken.get(&first.to_lowercase()).cloned();
+        let mut chosen = first.clone();
+        if collided_with.is_some() {
+            let (stem, ext) = match suffix.rfind('.') {
+                Some(dot) => suffix.split_at(dot),
+                None => (suffix, ""),
+            };
+            for n in 2.. {
+                let mark = format!("~{n}");
+                let candidate = file_name(prefix, name, &format!("{stem}{mark}{ext}"));
+                if !self.taken.contains_key(&candidate.to_lowercase()) {
+                    chosen = candidate;
+                    break;
+                }
+            }
+        }
+        self.taken.insert(chosen.to_lowercase(), name.to_owned());
+        UniqueName {
+            file_name: chosen,
+            collided_with,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn no_name_leaves_the_folder_or_breaks_the_file_system() {
+        for name in [
+            "..",
+            ".",
+            "/",
+            "/etc/passwd",
+            "../../x",
+            "a\\b",
+            "c:",
+            "\0",
+            "nul",
+            " ",
+            "",
+            "é/../ü",
+            "%2E%2E",
+        ] {
+            let f = file_name("log_", name, "_0.csv");
+            assert!(!f.contains(['/', '\\', '\0', ':']), "{name:?} -> {f}");
+            assert_ne!(f, ".");
+            assert_ne!(f, "..");
+            let path = std::path::Path::new("out").join(&f);
+            assert_eq!(path.parent(), Some(std::path::Path::new("out")), "{name:?}");
+            assert_eq!(path.components().count(), 2, "{name:?}");
+        }
+        assert_eq!(
+            component("%2E%2E"),
+            "%252E%252E",
+            "the mapping is reversible"
+        );
+        // Long names: bounded, distinct, stable.
+        let a = file_name("log_", &format!("{}a", "x".repeat(300)), ".csv");
+        let b = file_name("log_", &format!("{}b", "x".repeat(300)), ".csv");
+        assert!(a.len() <= MAX_FILE_NAME && b.len() <= MAX_FILE_NAME);
+        assert_ne!(a, b);
+        assert_eq!(
+            a,
+            file_name("log_", &format!("{}a", "x".repeat(300)), ".csv")
+        );
+        let multibyte = file_name("", &"é".repeat(200), ".csv");
+        assert!(multibyte.len() <= MAX_FILE_NAME, "{}", multibyte.len());
+    }
+
+    #[test]
+    fn collisions_are_told_and_resolved() {
+        let mut names = FileNames::new();
+        let first = names.unique("", "Gps", ".parquet");
+        assert_eq!(first.collided_with, None);
+        let second = names.unique("", "gps", ".parquet");
+        assert_eq!(second.file_name, "gps~2.parquet");
+        assert_eq!(second.collided_with.as_deref(), Some("Gps"));
+        // A name that already looks like a resolved one does not take it silently.
+        let third = names.unique("", "gps~2", ".parquet");
+        assert_ne!(third.file_name.to_lowercase(), "gps~2.parquet");
+    }
+}
