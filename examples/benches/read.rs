@@ -14,7 +14,13 @@
 //! - `decode_leaves`: (b) every leaf of every row decoded in one pass (`read::fold_rows`, as
 //!   the `scan` example does);
 //! - `open_then_decode`: `open`, then the leaves decoded from the index (`Scan::log`);
-//! - `stream_leaves`: the same through `StreamReader` (memory bounded by a few messages).
+//! - `stream_leaves`: the same through `StreamReader` (memory bounded by a few messages), one
+//!   thread;
+//! - `decode_leaves_one_core`: `decode_leaves` on one thread (`read::fold_rows_on(1, ..)`);
+//! - `px4_ulog_leaves`: the baseline of the three above: px4-ulog 0.6.1's streaming parser
+//!   decoding the same leaves of the same bytes in memory (`benches/px4_ulog_ref.rs`), one
+//!   thread. `stream_leaves` and `decode_leaves_one_core` against it are the per-core
+//!   figures; `decode_leaves` against it the wall-time figure on this machine's cores.
 //! - `typed_sensor_combined`: every `sensor_combined` row of the opened log decoded into a
 //!   derived struct (`Log::topic`, check included), against `dynamic_sensor_combined`: the
 //!   same rows' leaves through the dynamic plan. Both count rows/s and bytes of those rows.
@@ -23,6 +29,8 @@ use std::hint::black_box;
 use std::sync::OnceLock;
 
 use divan::Bencher;
+
+mod px4_ulog_ref;
 use divan::counter::{BytesCount, ItemsCount};
 use ulog_runtime::{Log, ULog};
 
@@ -144,6 +152,25 @@ fn stream_leaves(b: Bencher) {
     let data = big();
     b.counter(BytesCount::new(data.len()))
         .bench_local(|| black_box(examples::Scan::stream(black_box(data)).unwrap().all));
+}
+
+#[divan::bench(sample_count = 10, sample_size = 1)]
+fn decode_leaves_one_core(b: Bencher) {
+    let data = big();
+    b.counter(BytesCount::new(data.len()))
+        .bench_local(|| black_box(examples::Scan::bytes_on(1, black_box(data)).unwrap().all));
+}
+
+#[divan::bench(sample_count = 10, sample_size = 1)]
+fn px4_ulog_leaves(b: Bencher) {
+    let data = big();
+    // Both sides decode the same leaves to the same figures.
+    let ours = examples::Scan::bytes(data).unwrap().all;
+    let theirs = px4_ulog_ref::scan_bytes(data);
+    assert_eq!((ours.rows, ours.leaves), (theirs.rows, theirs.leaves));
+    assert!((ours.sum - theirs.sum).abs() <= 1e-9 * ours.sum.abs());
+    b.counter(BytesCount::new(data.len()))
+        .bench_local(|| black_box(px4_ulog_ref::scan_bytes(black_box(data))));
 }
 
 #[divan::bench(sample_count = 10, sample_size = 1)]

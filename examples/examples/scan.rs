@@ -11,7 +11,7 @@
 use std::process::ExitCode;
 
 use examples::Scan;
-use ulog_runtime::Log;
+use ulog_runtime::read::MappedFile;
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -27,7 +27,7 @@ fn main() -> ExitCode {
             .and_then(|f| Scan::stream(std::io::BufReader::new(f)))
     } else {
         // The file, memory-mapped, read in one pass on all cores.
-        Log::open(path).and_then(|log| Scan::bytes(log.bytes()))
+        MappedFile::open(path).and_then(|file| Scan::mapped(&file))
     };
     let scan = match scan {
         Ok(scan) => scan,

@@ -21,7 +21,8 @@ pub mod rover {
 use std::collections::BTreeMap;
 use std::io::Read;
 
-use ulog_runtime::read::Subscription;
+use ulog_runtime::read::{MappedFile, Subscription};
+use ulog_runtime::value::VisitLeaves;
 use ulog_runtime::{Event, Log, ReadError, Row, StreamReader};
 
 /// Totals over rows: how many, how many non-padding leaf values, and the sum of the finite
@@ -37,22 +38,94 @@ pub struct Totals {
 }
 
 impl Totals {
-    /// Adds one row, decoded through the dynamic leaf walk.
+    /// Adds one row, every leaf decoded through the dynamic plan's runs of same-typed
+    /// leaves ([`RowPlan::visit_runs`](ulog_runtime::value::RowPlan::visit_runs)).
     #[inline]
     pub fn add(&mut self, row: &Row<'_>) {
         self.rows += 1;
         let Some(plan) = row.plan() else { return };
-        let mut sum = 0.0f64;
-        if plan.for_each_leaf(row.data, |v| {
-            let x = v.as_f64();
-            if x.is_finite() {
-                sum += x;
-            }
-        }) {
+        let mut sum = Sum(0.0);
+        if plan.visit_runs(row.data, &mut sum) {
             self.leaves += plan.leaf_count() as u64;
-            self.sum += sum;
+            self.sum += sum.0;
         }
     }
+}
+
+/// The sum of the finite values of every run (`bool` as 0/1, `char` as a signed byte).
+struct Sum(f64);
+
+impl VisitLeaves<'_> for Sum {
+    #[inline]
+    fn int8(&mut self, v: &[u8]) {
+        self.0 += sum(v, |b| f64::from(b as i8));
+    }
+    #[inline]
+    fn char(&mut self, v: &[u8]) {
+        self.0 += sum(v, |b| f64::from(b as i8));
+    }
+    #[inline]
+    fn uint8(&mut self, v: &[u8]) {
+        self.0 += sum(v, f64::from);
+    }
+    #[inline]
+    fn bool(&mut self, v: &[u8]) {
+        self.0 += sum(v, |b| f64::from(u8::from(b != 0)));
+    }
+    #[inline]
+    fn int16(&mut self, v: &[[u8; 2]]) {
+        self.0 += sum(v, |b| f64::from(i16::from_le_bytes(b)));
+    }
+    #[inline]
+    fn uint16(&mut self, v: &[[u8; 2]]) {
+        self.0 += sum(v, |b| f64::from(u16::from_le_bytes(b)));
+    }
+    #[inline]
+    fn int32(&mut self, v: &[[u8; 4]]) {
+        self.0 += sum(v, |b| f64::from(i32::from_le_bytes(b)));
+    }
+    #[inline]
+    fn uint32(&mut self, v: &[[u8; 4]]) {
+        self.0 += sum(v, |b| f64::from(u32::from_le_bytes(b)));
+    }
+    #[inline]
+    fn int64(&mut self, v: &[[u8; 8]]) {
+        self.0 += sum(v, |b| i64::from_le_bytes(b) as f64);
+    }
+    #[inline]
+    fn uint64(&mut self, v: &[[u8; 8]]) {
+        self.0 += sum(v, |b| u64::from_le_bytes(b) as f64);
+    }
+    #[inline]
+    fn float(&mut self, v: &[[u8; 4]]) {
+        self.0 += sum_floats(v, |b| f64::from(f32::from_le_bytes(b)));
+    }
+    #[inline]
+    fn double(&mut self, v: &[[u8; 8]]) {
+        self.0 += sum_floats(v, f64::from_le_bytes);
+    }
+}
+
+/// Sums `value` over `items` (integers: every value is finite).
+#[inline(always)]
+fn sum<T: Copy>(items: &[T], value: impl Fn(T) -> f64) -> f64 {
+    items.iter().fold(0.0, |acc, &x| acc + value(x))
+}
+
+/// Sums the finite values of `items`: all of them in one go when none is NaN or infinite
+/// (the common case), else one by one.
+#[inline(always)]
+fn sum_floats<T: Copy>(items: &[T], value: impl Fn(T) -> f64) -> f64 {
+    let all = sum(items, &value);
+    if all.is_finite() {
+        // A NaN or an infinity among the values would have made the total one.
+        return all;
+    }
+    items
+        .iter()
+        .map(|&x| value(x))
+        .filter(|x| x.is_finite())
+        .sum()
 }
 
 /// The figures of the `scan` example for one file: overall and per topic instance.
@@ -151,23 +224,44 @@ impl Scan {
     pub fn bytes(bytes: &[u8]) -> Result<Scan, ReadError> {
         let (summary, parts) =
             ulog_runtime::read::fold_rows(bytes, Tally::default, |tally, row| tally.add(row))?;
+        Ok(Scan::from_parts(&summary, parts))
+    }
+
+    /// [`Scan::bytes`] on at most `threads` threads.
+    pub fn bytes_on(threads: usize, bytes: &[u8]) -> Result<Scan, ReadError> {
+        let (summary, parts) =
+            ulog_runtime::read::fold_rows_on(threads, bytes, Tally::default, |tally, row| {
+                tally.add(row);
+            })?;
+        Ok(Scan::from_parts(&summary, parts))
+    }
+
+    /// Scans a memory-mapped file in one pass, on all cores for large files, giving its
+    /// pages back as the walk advances ([`MappedFile::fold_rows`]).
+    pub fn mapped(file: &MappedFile) -> Result<Scan, ReadError> {
+        let (summary, parts) = file.fold_rows(Tally::default, |tally, row| tally.add(row))?;
+        Ok(Scan::from_parts(&summary, parts))
+    }
+
+    fn from_parts(summary: &ulog_runtime::read::Summary, parts: Vec<Tally>) -> Scan {
         let mut parts = parts.into_iter();
         let mut tally = parts.next().unwrap_or_default();
         for t in parts {
             tally.merge(t);
         }
-        Ok(tally.finish(summary.metadata.subscriptions()))
+        tally.finish(summary.metadata.subscriptions())
     }
 
     /// Scans a stream with [`StreamReader`], row by row.
     pub fn stream(input: impl Read) -> Result<Scan, ReadError> {
         let mut tally = Tally::default();
         let mut reader = StreamReader::new(input)?;
-        while let Some(event) = reader.next_event()? {
-            if let Event::Row(row) = event {
-                tally.add(&row);
+        reader.for_each_event(|event| {
+            // By reference: moving the row out of the event costs a copy a row.
+            if let Event::Row(row) = &event {
+                tally.add(row);
             }
-        }
+        })?;
         Ok(tally.finish(reader.metadata().subscriptions()))
     }
 }

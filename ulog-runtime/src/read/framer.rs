@@ -54,18 +54,40 @@ struct Resync {
     scan: u64,
 }
 
-/// Payload size range accepted for one `msg_id`, as message sizes (`2 + data`); empty if the
-/// id is not subscribed.
+/// What a `D` message of one `msg_id` looks like: the payload sizes accepted, as message
+/// sizes (`2 + data`; an empty range if the id is not subscribed), and for the fast path the
+/// subscription's index and where its `uint64_t` timestamp is: one table lookup a row.
 #[derive(Debug, Clone, Copy)]
-struct SizeRange {
+struct DataKind {
     min: u16,
     max: u16,
+    sub: u32,
+    /// Offset of the `uint64_t` timestamp in the data, or [`NO_U64_TIMESTAMP`].
+    timestamp: u16,
 }
 
-const UNSUBSCRIBED: SizeRange = SizeRange {
+/// A subscription without a `uint64_t` timestamp: its rows take the general path.
+const NO_U64_TIMESTAMP: u16 = u16::MAX;
+
+const UNSUBSCRIBED: DataKind = DataKind {
     min: u16::MAX,
     max: 0,
+    sub: 0,
+    timestamp: NO_U64_TIMESTAMP,
 };
+
+/// A `D` message the fast path takes ([`Framer::peek_data`]).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PeekedRow {
+    /// Index of the message header in the window.
+    pub(crate) at: usize,
+    /// Payload size (msg_id included).
+    pub(crate) size: usize,
+    /// The subscription.
+    pub(crate) sub: usize,
+    /// The row's timestamp.
+    pub(crate) timestamp: u64,
+}
 
 #[derive(Clone)]
 pub(crate) struct Framer {
@@ -76,7 +98,7 @@ pub(crate) struct Framer {
     segments: Vec<u64>,
     notices: Vec<Frame>,
     resync: Option<Resync>,
-    d_sizes: Vec<SizeRange>,
+    d_kinds: Vec<DataKind>,
 }
 
 impl Framer {
@@ -89,28 +111,40 @@ impl Framer {
             segments: Vec::new(),
             notices: Vec::new(),
             resync: None,
-            d_sizes: vec![UNSUBSCRIBED; 1 << 16],
+            d_kinds: vec![UNSUBSCRIBED; 1 << 16],
         }
     }
 
-    /// Declares `msg_id` subscribed with data payloads of `min..=max` bytes, or (`None`) with
-    /// rows that cannot be decoded.
-    pub(crate) fn subscribe(&mut self, msg_id: u16, sizes: Option<(usize, usize)>) {
+    /// Declares `msg_id` subscribed as subscription `sub` with data payloads of `min..=max`
+    /// bytes (`None`: rows that cannot be decoded) and a `uint64_t` timestamp at this offset
+    /// of the data, if it has one.
+    pub(crate) fn subscribe(
+        &mut self,
+        msg_id: u16,
+        sizes: Option<(usize, usize)>,
+        sub: usize,
+        u64_timestamp: Option<usize>,
+    ) {
         let to_size = |n: usize| u16::try_from(n + 2).unwrap_or(u16::MAX);
-        self.d_sizes[usize::from(msg_id)] = match sizes {
-            Some((min, max)) => SizeRange {
+        self.d_kinds[usize::from(msg_id)] = match sizes {
+            Some((min, max)) => DataKind {
                 min: to_size(min),
                 max: to_size(max),
+                sub: u32::try_from(sub).unwrap_or(u32::MAX),
+                timestamp: u64_timestamp
+                    .and_then(|t| u16::try_from(t).ok())
+                    .unwrap_or(NO_U64_TIMESTAMP),
             },
             None => UNSUBSCRIBED,
         };
     }
 
-    /// Fast path: the `D` message at the current position if it is strongly plausible and
-    /// whole in the window `[base, base + w.len())`, as `(index in w, size)`, without moving;
-    /// [`Framer::commit`] then accepts it. `None` means "take the general path".
+    /// Fast path: the `D` message at the current position if it is strongly plausible,
+    /// whole in the window `[base, base + w.len())` and of a subscription with a `uint64_t`
+    /// timestamp, without moving; [`Framer::commit`] then accepts it. `None` means "take the
+    /// general path".
     #[inline]
-    pub(crate) fn peek_data(&self, w: &[u8], base: u64) -> Option<(usize, usize)> {
+    pub(crate) fn peek_data(&self, w: &[u8], base: u64) -> Option<PeekedRow> {
         if self.resync.is_some() || !self.notices.is_empty() {
             return None;
         }
@@ -120,13 +154,25 @@ impl Framer {
             return None;
         }
         let size = u16::from_le_bytes([h[0], h[1]]);
-        let range = self.d_sizes[usize::from(u16::from_le_bytes([h[3], h[4]]))];
+        let kind = self.d_kinds[usize::from(u16::from_le_bytes([h[3], h[4]]))];
         let end = p + MESSAGE_HEADER_LEN + usize::from(size);
-        (range.min <= size
-            && size <= range.max
+        if !(kind.min <= size
+            && size <= kind.max
+            && kind.timestamp != NO_U64_TIMESTAMP
             && base + end as u64 <= self.segment_end
             && end <= w.len())
-        .then_some((p, usize::from(size)))
+        {
+            return None;
+        }
+        // Accepted rows hold the timestamp: it lies before any trailing padding.
+        let at = p + MESSAGE_HEADER_LEN + 2 + usize::from(kind.timestamp);
+        let timestamp = u64::from_le_bytes(w.get(at..at + 8)?.try_into().ok()?);
+        Some(PeekedRow {
+            at: p,
+            size: usize::from(size),
+            sub: kind.sub as usize,
+            timestamp,
+        })
     }
 
     /// The start of the next message.
@@ -360,9 +406,9 @@ impl Framer {
         }
         let strong = match kind {
             MessageType::Data => {
-                let range = self.d_sizes[usize::from(u16_at(p, 0))];
+                let kind = self.d_kinds[usize::from(u16_at(p, 0))];
                 let size = p.len() as u16;
-                range.min <= size && size <= range.max
+                kind.min <= size && size <= kind.max
             }
             MessageType::Sync => p[..8] == SYNC_MAGIC,
             MessageType::FlagBits => offset == HEADER_LEN as u64,

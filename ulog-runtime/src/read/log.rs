@@ -14,7 +14,7 @@ enum Bytes<'a> {
     Borrowed(&'a [u8]),
     Owned(Vec<u8>),
     #[cfg(feature = "mmap")]
-    Mapped(memmap2::Mmap),
+    Mapped(super::MappedFile),
 }
 
 impl Bytes<'_> {
@@ -130,10 +130,12 @@ pub struct Log<'a> {
     meta: Metadata,
     /// Every row, in file order.
     index: RowIndex,
-    /// Unwrapped timestamps of rows whose `timestamp` is not `uint64_t`, by row number.
-    other_timestamps: Vec<(usize, u64)>,
-    /// Row numbers per subscription, built at the first per-subscription access.
-    by_sub: std::sync::OnceLock<Vec<Vec<usize>>>,
+    /// Unwrapped timestamps of rows whose `timestamp` is not `uint64_t`, by the file offset
+    /// of the row's message (ascending).
+    other_timestamps: Vec<(u64, u64)>,
+    /// File offsets of the rows of each subscription, built at the first per-subscription
+    /// access: a row is then read without a lookup in the index.
+    by_sub: std::sync::OnceLock<Vec<Vec<u64>>>,
     logged: Vec<LoggedMessage>,
     changes: Vec<ParameterChange>,
     dropouts: Vec<Dropout>,
@@ -143,7 +145,7 @@ pub struct Log<'a> {
 
 /// Where a walk puts the rows it finds: the row index of a [`Log`], a count
 /// ([`summarize`]), or a fold ([`fold_rows`]).
-trait RowSink: Send + Sized {
+pub(crate) trait RowSink: Send + Sized {
     /// Takes one row: its message offset, packed bytes, subscription and timestamp.
     fn row(&mut self, meta: &Metadata, offset: u64, data: &[u8], sub: usize, timestamp: u64);
     /// Rows taken so far.
@@ -192,11 +194,22 @@ impl RowSink for RowCount {
 }
 
 /// Folds rows into accumulators, one per contiguous part of the file ([`fold_rows`]).
-struct Fold<'f, T, I, F> {
+pub(crate) struct Fold<'f, T, I, F> {
     init: &'f I,
     fold: &'f F,
-    parts: Vec<T>,
+    pub(crate) parts: Vec<T>,
     rows: usize,
+}
+
+impl<'f, T, I: Fn() -> T, F> Fold<'f, T, I, F> {
+    pub(crate) fn new(init: &'f I, fold: &'f F) -> Self {
+        Fold {
+            init,
+            fold,
+            parts: vec![init()],
+            rows: 0,
+        }
+    }
 }
 
 impl<T, I, F> RowSink for Fold<'_, T, I, F>
@@ -239,9 +252,9 @@ where
 }
 
 /// What walking (part of) a file collects besides the metadata.
-struct Collected<S> {
-    sink: S,
-    other_timestamps: Vec<(usize, u64)>,
+pub(crate) struct Collected<S> {
+    pub(crate) sink: S,
+    other_timestamps: Vec<(u64, u64)>,
     logged: Vec<LoggedMessage>,
     changes: Vec<ParameterChange>,
     dropouts: Vec<Dropout>,
@@ -333,7 +346,7 @@ impl<S: RowSink> Collected<S> {
                         if walker.meta.subscriptions[sub].timestamp_type()
                             != Some(Primitive::UInt64)
                         {
-                            self.other_timestamps.push((self.sink.len(), timestamp));
+                            self.other_timestamps.push((offset, timestamp));
                         }
                         self.sink
                             .row(&walker.meta, offset, &payload[2..], sub, timestamp);
@@ -348,13 +361,8 @@ impl<S: RowSink> Collected<S> {
     /// Appends a worker's part; `before` is the latest data timestamp before the part, which
     /// the part's dropouts and parameter changes are dated with when it is later than theirs.
     fn append(&mut self, mut part: Collected<S>, before: u64) {
-        let base = self.sink.len();
         self.sink.append(part.sink);
-        self.other_timestamps.extend(
-            part.other_timestamps
-                .into_iter()
-                .map(|(i, t)| (i + base, t)),
-        );
+        self.other_timestamps.append(&mut part.other_timestamps);
         self.logged.append(&mut part.logged);
         self.changes
             .extend(part.changes.into_iter().map(|c| ParameterChange {
@@ -390,12 +398,7 @@ impl Log<'static> {
     /// by another process while the `Log` lives.
     #[cfg(feature = "mmap")]
     pub fn open(path: impl AsRef<Path>) -> Result<Log<'static>, ReadError> {
-        let file = std::fs::File::open(path)?;
-        // SAFETY: the map is only read; the caller is told not to truncate the file meanwhile,
-        // which is the contract of every memory-mapped file reader.
-        #[allow(unsafe_code)]
-        let map = unsafe { memmap2::Mmap::map(&file)? };
-        Log::from_bytes(Bytes::Mapped(map))
+        Log::from_bytes(Bytes::Mapped(super::MappedFile::open(path)?))
     }
 
     /// Reads a whole file into memory.
@@ -418,7 +421,7 @@ impl<'a> Log<'a> {
     fn from_bytes(bytes: Bytes<'a>) -> Result<Log<'a>, ReadError> {
         // Real logs average well over 32 bytes a row; a wrong guess only costs a regrowth.
         let index = RowIndex::default().fork(bytes.as_slice().len());
-        let (meta, mut all) = collect(bytes.as_slice(), index)?;
+        let (meta, mut all) = collect(bytes.as_slice(), index, all_cores())?;
         all.sink.shrink_to_fit();
         Ok(Log {
             bytes,
@@ -482,16 +485,17 @@ impl<'a> Log<'a> {
         );
         Rows {
             log: self,
-            rows: self.row_numbers(sub.index).iter(),
+            rows: self.row_offsets(sub.index).iter(),
         }
     }
 
-    /// The numbers (positions in [`Log::data`]) of the rows of the `index`-th subscription.
-    pub(crate) fn row_numbers(&self, index: usize) -> &[usize] {
+    /// The file offsets of the messages of the rows of the `index`-th subscription, in file
+    /// order.
+    pub(crate) fn row_offsets(&self, index: usize) -> &[u64] {
         let by_sub = self.by_sub.get_or_init(|| {
             let mut by_sub = vec![Vec::new(); self.meta.subscriptions.len()];
-            for (i, row) in self.data().enumerate() {
-                by_sub[row.subscription.index].push(i);
+            for row in self.data() {
+                by_sub[row.subscription.index].push(row.offset);
             }
             by_sub
         });
@@ -572,18 +576,19 @@ impl<'a> Log<'a> {
         })
     }
 
-    /// The data of row number `i` (no subscription lookup, no timestamp).
+    /// The data of the row whose message is at file offset `at` (no subscription lookup, no
+    /// timestamp).
     #[inline(always)]
-    pub(crate) fn row_data(&self, i: usize) -> &[u8] {
+    pub(crate) fn row_data(&self, at: u64) -> &[u8] {
         let bytes = self.bytes.as_slice();
-        let at = self.index.get(i).0 as usize;
+        let at = at as usize;
         let size = usize::from(u16::from_le_bytes([bytes[at], bytes[at + 1]]));
         &bytes[at + MESSAGE_HEADER_LEN + 2..at + MESSAGE_HEADER_LEN + size]
     }
 
-    /// Row number `i`, whose message is at `at`.
+    /// The row whose message is at file offset `at`.
     #[inline(always)]
-    fn row_at(&self, i: usize, at: u64) -> Row<'_> {
+    fn row_at(&self, at: u64) -> Row<'_> {
         let bytes = self.bytes.as_slice();
         let at = at as usize;
         let size = usize::from(u16::from_le_bytes([bytes[at], bytes[at + 1]]));
@@ -603,7 +608,7 @@ impl<'a> Log<'a> {
             }
             _ => self
                 .other_timestamps
-                .binary_search_by_key(&i, |&(row, _)| row)
+                .binary_search_by_key(&(at as u64), |&(offset, _)| offset)
                 .map_or(0, |k| self.other_timestamps[k].1),
         };
         Row {
@@ -616,7 +621,7 @@ impl<'a> Log<'a> {
     }
 
     pub(crate) fn row(&self, i: usize) -> Row<'_> {
-        self.row_at(i, self.index.get(i).0)
+        self.row_at(self.index.get(i).0)
     }
 }
 
@@ -624,7 +629,7 @@ impl<'a> Log<'a> {
 #[derive(Debug, Clone)]
 pub struct Rows<'a> {
     log: &'a Log<'a>,
-    rows: std::slice::Iter<'a, usize>,
+    rows: std::slice::Iter<'a, u64>,
 }
 
 impl<'a> Iterator for Rows<'a> {
@@ -632,7 +637,7 @@ impl<'a> Iterator for Rows<'a> {
 
     #[inline]
     fn next(&mut self) -> Option<Row<'a>> {
-        self.rows.next().map(|&i| self.log.row(i))
+        self.rows.next().map(|&at| self.log.row_at(at))
     }
 
     fn size_hint(&self) -> (usize, Option<usize>) {
@@ -644,7 +649,7 @@ impl ExactSizeIterator for Rows<'_> {}
 
 impl DoubleEndedIterator for Rows<'_> {
     fn next_back(&mut self) -> Option<Self::Item> {
-        self.rows.next_back().map(|&i| self.log.row(i))
+        self.rows.next_back().map(|&at| self.log.row_at(at))
     }
 }
 
@@ -667,10 +672,7 @@ impl<'a> Iterator for DataRows<'a> {
             self.chunk += 1;
         }
         let c = &chunks[self.chunk];
-        Some(
-            self.log
-                .row_at(i, c.base + u64::from(c.offsets[i - c.first])),
-        )
+        Some(self.log.row_at(c.base + u64::from(c.offsets[i - c.first])))
     }
 
     fn size_hint(&self) -> (usize, Option<usize>) {
@@ -688,8 +690,8 @@ impl<'a> Iterator for DataRows<'a> {
             }
             let from = range.start.max(c.first);
             let to = range.end.min(c.end());
-            for (i, &rel) in (from..to).zip(&c.offsets[from - c.first..to - c.first]) {
-                acc = f(acc, log.row_at(i, c.base + u64::from(rel)));
+            for &rel in &c.offsets[from - c.first..to - c.first] {
+                acc = f(acc, log.row_at(c.base + u64::from(rel)));
             }
         }
         acc
@@ -738,11 +740,11 @@ pub struct Summary {
 /// assert_eq!((summary.rows, summary.diagnostics.len()), (1, 0));
 /// ```
 pub fn summarize(bytes: &[u8]) -> Result<Summary, ReadError> {
-    let (metadata, all) = collect(bytes, RowCount::default())?;
+    let (metadata, all) = collect(bytes, RowCount::default(), all_cores())?;
     Ok(summary(metadata, all))
 }
 
-fn summary<S: RowSink>(metadata: Metadata, all: Collected<S>) -> Summary {
+pub(crate) fn summary<S: RowSink>(metadata: Metadata, all: Collected<S>) -> Summary {
     Summary {
         metadata,
         rows: all.sink.len(),
@@ -783,19 +785,40 @@ where
     I: Fn() -> T + Sync,
     F: Fn(&mut T, &Row<'_>) + Sync,
 {
-    let sink = Fold {
-        init: &init,
-        fold: &fold,
-        parts: vec![init()],
-        rows: 0,
-    };
-    let (metadata, mut all) = collect(bytes, sink)?;
+    fold_rows_on(all_cores(), bytes, init, fold)
+}
+
+/// [`fold_rows`] on at most `threads` threads (1: this thread only), for programs that read
+/// many logs at once, one log a thread.
+pub fn fold_rows_on<T, I, F>(
+    threads: usize,
+    bytes: &[u8],
+    init: I,
+    fold: F,
+) -> Result<(Summary, Vec<T>), ReadError>
+where
+    T: Send,
+    I: Fn() -> T + Sync,
+    F: Fn(&mut T, &Row<'_>) + Sync,
+{
+    let (metadata, mut all) = collect(bytes, Fold::new(&init, &fold), threads.max(1))?;
     let parts = std::mem::take(&mut all.sink.parts);
     Ok((summary(metadata, all), parts))
 }
 
-/// Walks a whole file, rows going to `sink`.
-fn collect<S: RowSink>(data: &[u8], sink: S) -> Result<(Metadata, Collected<S>), ReadError> {
+/// The threads a walk uses by default: every core, up to 8.
+pub(crate) fn all_cores() -> usize {
+    std::thread::available_parallelism()
+        .map_or(1, usize::from)
+        .min(8)
+}
+
+/// Walks a whole file on up to `threads` threads, rows going to `sink`.
+pub(crate) fn collect<S: RowSink>(
+    data: &[u8],
+    sink: S,
+    threads: usize,
+) -> Result<(Metadata, Collected<S>), ReadError> {
     let header = FileHeader::parse(data)?;
     let mut walker = Walker::new(header);
     let mut all = Collected::new(sink);
@@ -804,7 +827,7 @@ fn collect<S: RowSink>(data: &[u8], sink: S) -> Result<(Metadata, Collected<S>),
     // this thread.
     let prefix = (data.len() / 64).min(8 << 20) as u64;
     all.walk(&mut walker, data, prefix, false)?;
-    walk_rest(&mut all, &mut walker, data)?;
+    walk_rest(&mut all, &mut walker, data, threads)?;
     Ok((walker.meta, all))
 }
 
@@ -819,10 +842,8 @@ fn walk_rest<S: RowSink>(
     all: &mut Collected<S>,
     walker: &mut Walker,
     data: &[u8],
+    threads: usize,
 ) -> Result<(), ReadError> {
-    let threads = std::thread::available_parallelism()
-        .map_or(1, usize::from)
-        .min(8);
     let start = walker.framer.pos() as usize;
     let rest = data.len().saturating_sub(start);
     if threads < 2

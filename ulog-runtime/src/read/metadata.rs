@@ -341,6 +341,8 @@ pub struct Metadata {
     pub(crate) info: Vec<Info>,
     pub(crate) multi_info: Vec<MultiInfo>,
     pub(crate) initial_parameters: Vec<Parameter>,
+    /// Position of each initial parameter in `initial_parameters`.
+    parameter_index: std::collections::HashMap<String, usize>,
     pub(crate) default_parameters: Vec<DefaultParameter>,
     pub(crate) subscriptions: Vec<Subscription>,
     /// Subscription index + 1 per `msg_id` (0: none), a flat table for the per-row lookup.
@@ -365,6 +367,7 @@ impl Metadata {
             info: Vec::new(),
             multi_info: Vec::new(),
             initial_parameters: Vec::new(),
+            parameter_index: std::collections::HashMap::new(),
             default_parameters: Vec::new(),
             subscriptions: Vec::new(),
             by_msg_id: vec![0; 1 << 16],
@@ -430,10 +433,8 @@ impl Metadata {
     /// # Ok::<(), ulog_runtime::ReadError>(())
     /// ```
     pub fn parameter(&self, name: &str) -> Option<ParamValue> {
-        self.initial_parameters
-            .iter()
-            .find(|p| p.name == name)
-            .map(|p| p.value)
+        let &i = self.parameter_index.get(name)?;
+        Some(self.initial_parameters[i].value)
     }
 
     /// The firmware version PX4 writes in the info `ver_sw_release` (`0xMMmmpptt`).
@@ -583,9 +584,14 @@ impl Metadata {
                         offset,
                     }));
                 }
-                match self.initial_parameters.iter_mut().find(|p| p.name == name) {
-                    Some(p) => p.value = value,
-                    None => self.initial_parameters.push(Parameter { name, value }),
+                // Logs hold thousands of parameters: found by name through an index.
+                match self.parameter_index.get(&name) {
+                    Some(&i) => self.initial_parameters[i].value = value,
+                    None => {
+                        self.parameter_index
+                            .insert(name.clone(), self.initial_parameters.len());
+                        self.initial_parameters.push(Parameter { name, value });
+                    }
                 }
                 Ok(Applied::Nothing)
             }
@@ -754,25 +760,13 @@ impl Metadata {
             .map(|r| r.2 as usize)
     }
 
-    /// Fast path of [`Metadata::apply`] for a `D` message the framer found strongly plausible:
-    /// `(subscription, timestamp)` for the common case (`uint64_t` timestamp), with
-    /// the same effects as the general path; `None` changes nothing.
+    /// The fast path's part of [`Metadata::apply`] for a row the framer took: the latest
+    /// timestamp seen.
     #[inline]
-    pub(crate) fn fast_row(&mut self, msg_id: u16, data: &[u8]) -> Option<(usize, u64)> {
-        let index = self.by_msg_id[usize::from(msg_id)].checked_sub(1)? as usize;
-        let sub = &self.subscriptions[index];
-        let (min, max) = sub.sizes?;
-        let (at, Primitive::UInt64) = sub.timestamp? else {
-            return None;
-        };
-        if data.len() < min || data.len() > max {
-            return None;
-        }
-        let timestamp = u64::from_le_bytes(data.get(at..at + 8)?.try_into().ok()?);
+    pub(crate) fn saw_timestamp(&mut self, timestamp: u64) {
         if timestamp > self.last_timestamp {
             self.last_timestamp = timestamp;
         }
-        Some((index, timestamp))
     }
 
     fn data(&mut self, offset: u64, msg_id: u16, data: &[u8]) -> Result<Applied, ReadError> {

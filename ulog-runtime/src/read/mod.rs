@@ -4,12 +4,16 @@
 
 mod framer;
 mod log;
+#[cfg(feature = "mmap")]
+mod mapped;
 mod message;
 mod metadata;
 mod stream;
 mod topics;
 
-pub use log::{DataRows, Log, Rows, Summary, fold_rows, summarize};
+pub use log::{DataRows, Log, Rows, Summary, fold_rows, fold_rows_on, summarize};
+#[cfg(feature = "mmap")]
+pub use mapped::MappedFile;
 pub use message::{
     FLAG_BITS_LEN, FileHeader, FlagBits, HEADER_LEN, KNOWN_VERSION, KeyValue, MAGIC,
     MESSAGE_HEADER_LEN, MalformedMessage, Message, MessageTooLarge, MessageType, SYNC_MAGIC,
@@ -23,7 +27,7 @@ pub use stream::{Event, StreamReader};
 pub use topics::{Skipped, TopicSummary};
 
 use crate::error::{Diagnostic, DiagnosticKind, ReadError};
-use crate::schema::Schema;
+use crate::schema::{Primitive, Schema};
 use crate::value::{RowPlan, Scalar, Value};
 use framer::{Frame, Framer};
 use metadata::Applied;
@@ -116,17 +120,15 @@ impl Walker {
     /// window `[base, base + w.len())`, of a subscription with a `uint64_t` timestamp).
     #[inline]
     fn fast_row(&mut self, w: &[u8], base: u64) -> Option<FastRow> {
-        let (at, size) = self.framer.peek_data(w, base)?;
-        let payload = &w[at + MESSAGE_HEADER_LEN..at + MESSAGE_HEADER_LEN + size];
-        let msg_id = u16::from_le_bytes([payload[0], payload[1]]);
-        let (sub, timestamp) = self.meta.fast_row(msg_id, &payload[2..])?;
-        let offset = base + at as u64;
-        self.framer.commit(offset, size);
+        let row = self.framer.peek_data(w, base)?;
+        let offset = base + row.at as u64;
+        self.framer.commit(offset, row.size);
+        self.meta.saw_timestamp(row.timestamp);
         Some(FastRow {
             offset,
-            data: at + MESSAGE_HEADER_LEN + 2..at + MESSAGE_HEADER_LEN + size,
-            sub,
-            timestamp,
+            data: row.at + MESSAGE_HEADER_LEN + 2..row.at + MESSAGE_HEADER_LEN + row.size,
+            sub: row.sub,
+            timestamp: row.timestamp,
         })
     }
 
@@ -153,7 +155,12 @@ impl Walker {
                     diagnostic,
                 } = &applied
                 {
-                    self.framer.subscribe(*msg_id, *sizes);
+                    let sub = self.meta.subscriptions.len() - 1;
+                    let u64_timestamp = match self.meta.subscriptions[sub].timestamp {
+                        Some((at, Primitive::UInt64)) => Some(at),
+                        _ => None,
+                    };
+                    self.framer.subscribe(*msg_id, *sizes, sub, u64_timestamp);
                     if diagnostic
                         .as_ref()
                         .is_some_and(|d| matches!(d.kind, DiagnosticKind::DuplicateMsgId { .. }))

@@ -159,19 +159,19 @@ impl<'a, T: Topic> TypedTopic<'a, T> {
                 .iter()
                 .map(|&i| {
                     let multi_id = self.log.subscriptions()[i].multi_id;
-                    (multi_id, self.log.row_numbers(i).iter())
+                    (multi_id, self.log.row_offsets(i).iter())
                 })
                 .collect(),
         }
     }
 }
 
-/// Row numbers of several subscriptions merged into file order.
+/// The rows of several subscriptions merged into file order (by their offsets).
 #[derive(Clone)]
 struct Merge<'a> {
     log: &'a Log<'a>,
-    /// Each subscription's remaining row numbers, with its `multi_id`.
-    heads: Vec<(u8, std::slice::Iter<'a, usize>)>,
+    /// Each subscription's remaining row offsets, with its `multi_id`.
+    heads: Vec<(u8, std::slice::Iter<'a, u64>)>,
 }
 
 impl<'a> Merge<'a> {

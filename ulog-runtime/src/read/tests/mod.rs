@@ -91,7 +91,7 @@ fn stream_rows(bytes: &[u8], chunk: usize) -> (Vec<(u64, Vec<u8>)>, Vec<Diagnost
     while let Some(e) = reader.next_event().unwrap() {
         match e {
             Event::Row(r) => rows.push((r.offset, r.data.to_vec())),
-            Event::Diagnostic(d) => diags.push(d),
+            Event::Diagnostic(d) => diags.push(*d),
             _ => {}
         }
     }
