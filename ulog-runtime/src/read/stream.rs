@@ -192,7 +192,9 @@ impl<R: Read> StreamReader<R> {
         }
     }
 
-    /// The next event, or `None` at the end of the file.
+    /// The next event, or `None` at the end of the file. In a hot loop, match the event by
+    /// reference (`match &event`): moving the row out of it copies it through memory the
+    /// processor has just written, which costs more than decoding a small row.
     #[allow(clippy::should_implement_trait)]
     pub fn next_event(&mut self) -> Result<Option<Event<'_>>, ReadError> {
         if self.pending.is_some() {
