@@ -72,22 +72,7 @@ fn sensor_combined_size(log: &Log<'_>) -> (usize, usize) {
 
 fn big() -> &'static [u8] {
     static BIG: OnceLock<Vec<u8>> = OnceLock::new();
-    BIG.get_or_init(|| {
-        let corpus = std::env::var("ULOG_CORPUS").unwrap_or_else(|_| {
-            concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/testdata/ulog").to_owned()
-        });
-        let source = std::env::var("ULOG_BENCH_SOURCE")
-            .unwrap_or_else(|_| format!("{corpus}/px4-ulog-rs/quadrotor_local.ulg"));
-        let mb: usize = std::env::var("ULOG_BENCH_MB")
-            .ok()
-            .and_then(|s| s.parse().ok())
-            .unwrap_or(400);
-        let bytes = std::fs::read(&source)
-            .unwrap_or_else(|e| panic!("{source}: {e} (set ULOG_BENCH_SOURCE)"));
-        let big = examples::inflate(&bytes, mb * 1_000_000).expect("a clean source log");
-        eprintln!("benchmark log: {} bytes from {source}", big.len());
-        big
-    })
+    BIG.get_or_init(|| examples::bench_log("px4-ulog-rs/quadrotor_local.ulg", 1))
 }
 
 fn main() {

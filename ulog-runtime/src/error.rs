@@ -76,6 +76,23 @@ impl fmt::Display for Diagnostic {
 impl std::error::Error for Diagnostic {}
 
 impl Diagnostic {
+    /// The bytes this diagnostic reports as damaged (skipped, or a message cut short).
+    pub fn damaged_range(&self) -> Option<std::ops::Range<u64>> {
+        match self.kind {
+            DiagnosticKind::Skipped { to, .. } => Some(self.offset..to),
+            DiagnosticKind::Truncated {
+                declared,
+                available,
+            } => Some(
+                self.offset
+                    ..self.offset
+                        + crate::read::MESSAGE_HEADER_LEN as u64 * u64::from(declared.is_some())
+                        + available,
+            ),
+            _ => None,
+        }
+    }
+
     /// Whether this reports damage (skipped or cut bytes, overlapping messages) rather than
     /// a message that was framed correctly but could not be used.
     pub fn is_corruption(&self) -> bool {

@@ -41,6 +41,29 @@ pub fn component(name: &str) -> String {
     out
 }
 
+/// The name a log gives its exports: its file name without the `.ulg` extension (any case),
+/// lossy UTF-8 (`logs/09_12_34.ulg` is `09_12_34`). Pass it through [`component`] or
+/// [`FileNames`] before making a path of it.
+///
+/// ```
+/// use ulog_runtime::file_names::log_stem;
+/// assert_eq!(log_stem("logs/09_12_34.ulg".as_ref()), "09_12_34");
+/// assert_eq!(log_stem("FLIGHT.ULG".as_ref()), "FLIGHT");
+/// assert_eq!(log_stem("dump.bin".as_ref()), "dump.bin");
+/// ```
+pub fn log_stem(path: &std::path::Path) -> String {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    match name.len().checked_sub(4) {
+        Some(dot) if name.is_char_boundary(dot) && name[dot..].eq_ignore_ascii_case(".ulg") => {
+            name[..dot].to_owned()
+        }
+        _ => name,
+    }
+}
+
 /// 64-bit FNV-1a: a stable hash for shortened names (the same name, the same file name, on
 /// every machine and run).
 fn fnv1a(name: &str) -> u64 {

@@ -9,6 +9,8 @@
 //!   own definitions once, then decoded by offset reads ([`Log::topic`]) and written
 //!   ([`Writer::topic`]).
 //! - [`write`](mod@write): a [`Writer`] of version-1 files.
+//! - [`columns`]: a topic instance as typed columns (and, with features, Arrow record
+//!   batches and Parquet files).
 //! - [`file_names`]: safe, unique file names for exports that write a file per topic.
 //!
 //! ```no_run
@@ -29,8 +31,12 @@ extern crate self as ulog_runtime;
 pub mod __private;
 #[cfg(feature = "codegen")]
 pub mod codegen;
+pub mod columns;
+#[cfg(feature = "serde")]
+pub mod document;
 mod error;
 pub mod file_names;
+pub mod pytext;
 pub mod read;
 pub mod schema;
 pub mod typed;
@@ -45,7 +51,8 @@ pub use ulog_derive::ULog;
 pub use value::{Scalar, Value};
 pub use write::{WriteError, Writer, WriterOptions};
 
-/// The README's examples, compiled as doctests.
-#[cfg(doctest)]
+/// The README's examples, compiled as doctests (with the features they use, as the
+/// workspace's test run has them).
+#[cfg(all(doctest, feature = "parquet"))]
 #[doc = include_str!("../../README.md")]
 struct ReadmeDoctests;

@@ -1,7 +1,7 @@
 //! The `ulog` binary against pyulog: `ulog csv` equals `ulog2csv` value by value on every
 //! corpus file, `ulog params`/`info`/`messages` carry the facts of pyulog's committed
 //! `*_params.txt`, `*_info.txt` and `*_messages.txt`, snapshots of the human-readable output,
-//! and one-line errors.
+//! and one-line errors; `ulog parquet` read back by pyarrow and DuckDB ([`parquet`]).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -13,6 +13,9 @@ mod corpus;
 #[path = "../../tests/src/files.rs"]
 #[allow(unreachable_pub)]
 mod files;
+
+#[path = "cli/parquet.rs"]
+mod parquet;
 
 use corpus::{corpus_dir, corpus_files, pyulog_blind_ranges, short_name, under_ci};
 
@@ -484,8 +487,14 @@ fn json_and_codegen() {
     assert_eq!(rows[2]["data"]["name"], "ab");
     let doc: serde_json::Value =
         serde_json::from_str(&stdout(&["json", "--document", "-m", "esc_status", file])).unwrap();
-    assert_eq!(doc["topics"].as_array().unwrap().len(), 2);
-    assert_eq!(doc["topics"][0]["rows"].as_array().unwrap().len(), 11);
+    assert_eq!(doc["data"].as_array().unwrap().len(), 2);
+    assert_eq!(doc["data"][0]["rows"].as_array().unwrap().len(), 11);
+    assert_eq!(
+        doc["topics"].as_array().unwrap().len(),
+        2,
+        "each instance with its row count"
+    );
+    assert_eq!(doc["topics"][0]["rows"], 11);
     assert_eq!(doc["info"]["sys_name"], "snap");
     // Integer parameters stay integers; floats keep their shortest text.
     assert!(
@@ -502,7 +511,7 @@ fn json_and_codegen() {
     assert_eq!(doc["dropouts"][0]["duration_ms"], 25);
     assert_eq!(doc["logged_messages"][1]["tag"], 2);
     assert_eq!(
-        doc["topics"][0]["rows"][10]["data"]["esc"][0]["esc_voltage"].to_string(),
+        doc["data"][0]["rows"][10]["data"]["esc"][0]["esc_voltage"].to_string(),
         "1.0"
     );
     let code = stdout(&["codegen", file, "-m", "esc_status"]);

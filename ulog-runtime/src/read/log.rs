@@ -561,19 +561,9 @@ impl<'a> Log<'a> {
 
     /// Byte ranges skipped as corrupt (truncated tails included).
     pub fn corrupt_ranges(&self) -> impl Iterator<Item = std::ops::Range<u64>> + '_ {
-        self.diagnostics.iter().filter_map(|d| match d.kind {
-            crate::DiagnosticKind::Skipped { to, .. } => Some(d.offset..to),
-            crate::DiagnosticKind::Truncated {
-                declared,
-                available,
-            } => Some(
-                d.offset
-                    ..d.offset
-                        + MESSAGE_HEADER_LEN as u64 * u64::from(declared.is_some())
-                        + available,
-            ),
-            _ => None,
-        })
+        self.diagnostics
+            .iter()
+            .filter_map(Diagnostic::damaged_range)
     }
 
     /// The data of the row whose message is at file offset `at` (no subscription lookup, no

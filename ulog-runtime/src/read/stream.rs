@@ -110,6 +110,17 @@ impl<R: Read> StreamReader<R> {
         self.buf.capacity()
     }
 
+    /// The input.
+    pub fn get_ref(&self) -> &R {
+        &self.input
+    }
+
+    /// The input. Reading from it directly takes bytes the reader has not seen: do it only
+    /// when the reader is done with it (after [`StreamReader::next_event`] gave `None`).
+    pub fn get_mut(&mut self) -> &mut R {
+        &mut self.input
+    }
+
     /// Everything read so far but the data rows.
     pub fn metadata(&self) -> &Metadata {
         &self.walker.meta

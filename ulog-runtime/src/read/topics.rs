@@ -101,43 +101,54 @@ impl Skipped {
     pub fn is_empty(&self) -> bool {
         *self == Skipped::default()
     }
+
+    /// What the diagnostics of a reading pass say was left out.
+    pub fn of(diagnostics: &[crate::Diagnostic]) -> Skipped {
+        let mut out = Skipped::default();
+        for d in diagnostics {
+            out.add(d);
+        }
+        out
+    }
+
+    /// Counts what one diagnostic says was left out (for a pass that does not keep its
+    /// diagnostics).
+    pub fn add(&mut self, d: &crate::Diagnostic) {
+        use crate::DiagnosticKind as K;
+        if let Some(r) = d.damaged_range() {
+            self.damaged_bytes += r.end - r.start;
+        }
+        match &d.kind {
+            K::BadSubscription {
+                topic,
+                msg_id,
+                error,
+            } => self
+                .unreadable_topics
+                .push((topic.clone(), *msg_id, error.to_string())),
+            K::PayloadSize {
+                topic, multi_id, ..
+            } => match self
+                .misfit_rows
+                .iter_mut()
+                .find(|(t, m, _)| t == topic && m == multi_id)
+            {
+                Some(entry) => entry.2 += 1,
+                None => self.misfit_rows.push((topic.clone(), *multi_id, 1)),
+            },
+            K::UnknownMsgId { .. } => self.orphan_rows += 1,
+            K::UnknownMessageType { .. } | K::Malformed(_) | K::InvalidFormat { .. } => {
+                self.unusable_messages += 1;
+            }
+            _ => {}
+        }
+    }
 }
 
 impl Log<'_> {
     /// What was left out while reading, from [`Log::diagnostics`], grouped as an export
     /// reports it.
     pub fn skipped(&self) -> Skipped {
-        use crate::DiagnosticKind as K;
-        let mut out = Skipped {
-            damaged_bytes: self.corrupt_ranges().map(|r| r.end - r.start).sum(),
-            ..Skipped::default()
-        };
-        for d in self.diagnostics() {
-            match &d.kind {
-                K::BadSubscription {
-                    topic,
-                    msg_id,
-                    error,
-                } => out
-                    .unreadable_topics
-                    .push((topic.clone(), *msg_id, error.to_string())),
-                K::PayloadSize {
-                    topic, multi_id, ..
-                } => match out
-                    .misfit_rows
-                    .iter_mut()
-                    .find(|(t, m, _)| t == topic && m == multi_id)
-                {
-                    Some(entry) => entry.2 += 1,
-                    None => out.misfit_rows.push((topic.clone(), *multi_id, 1)),
-                },
-                K::UnknownMsgId { .. } => out.orphan_rows += 1,
-                K::UnknownMessageType { .. } | K::Malformed(_) | K::InvalidFormat { .. } => {
-                    out.unusable_messages += 1;
-                }
-                _ => {}
-            }
-        }
-        out
+        Skipped::of(self.diagnostics())
     }
 }

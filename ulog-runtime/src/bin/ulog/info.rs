@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use ulog_runtime::{Log, Value};
 
 use crate::Failure;
-use crate::number::{f32_text, f64_text};
+use ulog_runtime::pytext::{f32_text, f64_text};
 
 /// `ulog info FILE [-v]`.
 #[derive(clap::Args)]

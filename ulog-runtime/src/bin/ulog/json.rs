@@ -8,12 +8,12 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use serde::Serialize;
-use serde::ser::{SerializeMap, SerializeSeq};
-use ulog_runtime::read::{ParamValue, Subscription};
+use serde::ser::SerializeSeq;
+use ulog_runtime::document::LogFacts;
+use ulog_runtime::read::Subscription;
 use ulog_runtime::{Log, Value};
 
 use crate::Failure;
-use crate::csv::selected;
 
 /// `ulog json FILE [-m a,b] [--document]`.
 #[derive(clap::Args)]
@@ -23,9 +23,10 @@ pub(crate) struct Args {
     /// Only these topics (comma-separated).
     #[arg(short, long, value_delimiter = ',')]
     messages: Vec<String>,
-    /// One document: header, info, multi info, parameters (initial, changes, defaults),
-    /// logged strings, dropouts, diagnostics and every topic's rows. NaN and infinities are
-    /// written as null.
+    /// One document: the log's facts as `ulog parquet` writes them to metadata.json (header,
+    /// flag bits, info, multi info, parameters, changes and defaults, logged strings,
+    /// dropouts, per-topic row counts, what was skipped, diagnostics) and, under `data`,
+    /// every topic instance's rows. NaN and infinities are written as null.
     #[arg(long)]
     document: bool,
 }
@@ -64,63 +65,13 @@ struct RowLine<'a> {
     data: Option<Value>,
 }
 
-/// Pairs serialized as a map, in their order (a log's order, not sorted).
-struct Ordered<'a, V>(Vec<(&'a str, V)>);
-
-impl<V: Serialize> Serialize for Ordered<'_, V> {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        let mut map = s.serialize_map(Some(self.0.len()))?;
-        for (k, v) in &self.0 {
-            map.serialize_entry(k, v)?;
-        }
-        map.end()
-    }
-}
-
+/// `--document`: the log's facts (as a Parquet conversion's metadata.json has them) and
+/// every selected topic instance's rows.
 #[derive(Serialize)]
 struct Document<'a> {
-    version: u8,
-    start_timestamp: u64,
-    software_version: Option<String>,
-    info: Ordered<'a, &'a Value>,
-    /// Per key: every value, each as its parts (a value and its continuations).
-    multi_info: Ordered<'a, &'a [Vec<Value>]>,
-    parameters: Ordered<'a, ParamValue>,
-    parameter_changes: Vec<Change<'a>>,
-    default_parameters: Vec<Default<'a>>,
-    logged_messages: Vec<Logged<'a>>,
-    dropouts: Vec<Dropout>,
-    diagnostics: Vec<String>,
-    topics: Vec<Topic<'a>>,
-}
-
-#[derive(Serialize)]
-struct Change<'a> {
-    timestamp: u64,
-    name: &'a str,
-    value: ParamValue,
-}
-
-#[derive(Serialize)]
-struct Default<'a> {
-    name: &'a str,
-    value: ParamValue,
-    /// Bit 0: the system default; bit 1: the current setup's.
-    default_types: u8,
-}
-
-#[derive(Serialize)]
-struct Logged<'a> {
-    timestamp: u64,
-    level: Option<&'static str>,
-    tag: Option<u16>,
-    text: &'a str,
-}
-
-#[derive(Serialize)]
-struct Dropout {
-    timestamp: u64,
-    duration_ms: u16,
+    #[serde(flatten)]
+    facts: LogFacts,
+    data: Vec<Topic<'a>>,
 }
 
 #[derive(Serialize)]
@@ -160,79 +111,19 @@ impl Serialize for Rows<'_> {
 
 impl<'a> Document<'a> {
     fn new(log: &'a Log<'a>, topics: &[String]) -> Document<'a> {
-        let meta = log.metadata();
+        let schema = log.metadata().schema();
         Document {
-            version: log.header().version,
-            start_timestamp: log.header().start_timestamp,
-            software_version: meta.software_version(),
-            info: Ordered(
-                meta.info()
-                    .iter()
-                    .map(|i| (i.key.as_str(), &i.value))
-                    .collect(),
-            ),
-            multi_info: Ordered(
-                meta.multi_info()
-                    .iter()
-                    .map(|m| (m.key.as_str(), m.values.as_slice()))
-                    .collect(),
-            ),
-            parameters: Ordered(
-                meta.initial_parameters()
-                    .iter()
-                    .map(|p| (p.name.as_str(), p.value))
-                    .collect(),
-            ),
-            parameter_changes: log
-                .parameter_changes()
-                .iter()
-                .map(|c| Change {
-                    timestamp: c.timestamp,
-                    name: &c.name,
-                    value: c.value,
-                })
-                .collect(),
-            default_parameters: meta
-                .default_parameters()
-                .iter()
-                .map(|d| Default {
-                    name: &d.name,
-                    value: d.value,
-                    default_types: d.default_types,
-                })
-                .collect(),
-            logged_messages: log
-                .logged_messages()
-                .iter()
-                .map(|m| Logged {
-                    timestamp: m.timestamp,
-                    level: m.level().map(|l| l.name()),
-                    tag: m.tag,
-                    text: &m.text,
-                })
-                .collect(),
-            dropouts: log
-                .dropouts()
-                .iter()
-                .map(|d| Dropout {
-                    timestamp: d.timestamp,
-                    duration_ms: d.duration_ms,
-                })
-                .collect(),
-            diagnostics: log.diagnostics().iter().map(ToString::to_string).collect(),
-            topics: selected(log, topics)
+            facts: LogFacts::of_log(log),
+            data: log
+                .instances(topics)
                 .into_iter()
                 .map(|group| Topic {
                     topic: &group[0].name,
                     multi_id: group[0].multi_id,
-                    format: meta
-                        .schema()
-                        .format(
-                            group[0]
-                                .format()
-                                .expect("selected subscriptions have formats"),
-                        )
-                        .to_string(),
+                    format: group[0]
+                        .format()
+                        .map(|id| schema.format(id).to_string())
+                        .unwrap_or_default(),
                     rows: Rows { log, subs: group },
                 })
                 .collect(),

@@ -15,8 +15,8 @@ mod csv;
 mod info;
 mod json;
 mod messages;
-mod number;
 mod params;
+mod parquet;
 
 /// Inspect, export and generate code from PX4 ULog (.ulg) flight logs.
 #[derive(Parser)]
@@ -36,6 +36,9 @@ enum Command {
     Messages(messages::Args),
     /// One CSV per subscription, `<stem>_<topic>_<multi_id>.csv`, as pyulog's `ulog2csv`.
     Csv(csv::Args),
+    /// Per-topic Parquet files and a metadata.json per log, many logs in parallel
+    /// (`DIR/<stem>/<topic>_<multi_id>.parquet`, or hive partitions with `--layout hive`).
+    Parquet(parquet::Args),
     /// Rows as JSON Lines (one object per row), or one JSON document.
     Json(json::Args),
     /// Rust types for a log's formats (several logs: one type per topic that reads them
@@ -135,6 +138,7 @@ fn run(command: Command, out: &mut impl Write) -> Result<(), Failure> {
         Command::Messages(args) => messages::run(&args, out),
         Command::Csv(args) => csv::run(&args, out),
         Command::Json(args) => json::run(&args, out),
+        Command::Parquet(args) => parquet::run(&args, out),
         Command::Codegen(args) => codegen::run(&args, out),
         Command::CheckMsg(args) => check_msg::run(&args, out),
     }
@@ -184,6 +188,44 @@ pub(crate) fn check_topics(log: &Log<'_>, path: &Path, topics: &[String]) -> Res
         }
     }
     Ok(())
+}
+
+/// Says on stderr what the export left out, so that nothing is skipped silently.
+pub(crate) fn report_skipped(
+    skipped: &ulog_runtime::read::Skipped,
+    file: &Path,
+    topics: &[String],
+    nothing_written: Option<&str>,
+) {
+    let wanted = |t: &str| topics.is_empty() || topics.iter().any(|w| w == t);
+    let say = |what: String| eprintln!("ulog: {}: {what}", file.display());
+    for (topic, msg_id, why) in skipped.unreadable_topics.iter().filter(|t| wanted(&t.0)) {
+        say(format!("skipped topic `{topic}` (msg_id {msg_id}): {why}"));
+    }
+    for (topic, multi_id, rows) in skipped.misfit_rows.iter().filter(|t| wanted(&t.0)) {
+        say(format!(
+            "skipped {rows} row{} of `{topic}` #{multi_id} whose size does not fit the format",
+            if *rows == 1 { "" } else { "s" }
+        ));
+    }
+    if skipped.orphan_rows > 0 && topics.is_empty() {
+        say(format!(
+            "skipped {} row{} of msg_ids no subscription declares",
+            skipped.orphan_rows,
+            if skipped.orphan_rows == 1 { "" } else { "s" }
+        ));
+    }
+    if skipped.damaged_bytes > 0 {
+        say(format!(
+            "{} damaged bytes skipped (`ulog info -v` lists where)",
+            skipped.damaged_bytes
+        ));
+    }
+    if let Some(kind) = nothing_written {
+        say(format!(
+            "no {kind} file written: no topic has rows that can be read"
+        ));
+    }
 }
 
 /// A percentage on stderr while long exports run, only when stderr is a terminal and the

@@ -7,7 +7,7 @@ use ulog_runtime::Log;
 use ulog_runtime::read::ParamValue;
 
 use crate::Failure;
-use crate::number::f64_text;
+use ulog_runtime::pytext::f64_text;
 
 /// `ulog params FILE [-i] [-c] [-t] [-l D] [-d system|current_setup]`.
 #[derive(clap::Args)]

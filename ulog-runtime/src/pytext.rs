@@ -1,9 +1,16 @@
-//! Numbers as Python (and numpy) print them, so `ulog` output reads like pyulog's and parses
-//! back to the exact stored value.
+//! Numbers as Python (and numpy) print them, so that exports read like pyulog's output and
+//! parse back to the exact stored value.
+//!
+//! ```
+//! use ulog_runtime::pytext::{f32_text, f64_text};
+//! assert_eq!(f32_text(0.1), "0.1");          // numpy's str(np.float32(0.1))
+//! assert_eq!(f64_text(f64::from(0.1f32)), "0.10000000149011612"); // Python's repr
+//! assert_eq!(f64_text(1.5e-5), "1.5e-05");
+//! ```
 
 /// `x` as Python's `repr(float)`: shortest digits that round-trip (a tie to the even digit),
 /// positional for `1e-4 <= |x| < 1e16`, else `1.5e-05` / `1e+16`.
-pub(crate) fn f64_text(x: f64) -> String {
+pub fn f64_text(x: f64) -> String {
     special(x).unwrap_or_else(|| {
         let sci = tie_to_even(format!("{x:e}"), |t| t.parse::<f64>().ok() == Some(x), x);
         python_style(&sci, (1e-4..1e16).contains(&x.abs()))
@@ -12,7 +19,7 @@ pub(crate) fn f64_text(x: f64) -> String {
 
 /// `x` as numpy prints a `float32`: the shortest digits that round-trip as `f32` (a tie to
 /// the even digit), positional for `1e-4 <= |x| < 1e6`, else `4.2949675e+06`.
-pub(crate) fn f32_text(x: f32) -> String {
+pub fn f32_text(x: f32) -> String {
     let wide = f64::from(x);
     special(wide).unwrap_or_else(|| {
         let sci = tie_to_even(format!("{x:e}"), |t| t.parse::<f32>().ok() == Some(x), wide);

@@ -1,0 +1,133 @@
+//! `ulog parquet`: logs to per-topic Parquet files and a metadata.json each, over
+//! `columns::parquet::Converter`.
+
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use ulog_runtime::columns::Window;
+use ulog_runtime::columns::parquet::{Converter, Layout, ParquetOptions};
+
+use crate::Failure;
+
+/// `ulog parquet FILE... -o DIR [-m a,b] [--start S --end S] [--layout hive] [-j N]`.
+#[derive(clap::Args)]
+pub(crate) struct Args {
+    /// The logs.
+    #[arg(required = true)]
+    files: Vec<PathBuf>,
+    /// Output folder.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Only these topics (comma-separated).
+    #[arg(short, long, value_delimiter = ',')]
+    messages: Vec<String>,
+    /// Only rows from this time on, in seconds (pyulog's `-ts`, `--time_s`).
+    #[arg(long, alias = "time_s")]
+    start: Option<f64>,
+    /// Only rows before this time, in seconds (pyulog's `-te`, `--time_e`).
+    #[arg(long, alias = "time_e")]
+    end: Option<f64>,
+    /// `per-log`: DIR/<stem>/<topic>_<multi_id>.parquet; `hive`:
+    /// DIR/topic=<topic>/log=<stem>/multi_id=<m>/data.parquet.
+    #[arg(long, value_enum, default_value = "per-log")]
+    layout: LayoutArg,
+    /// Logs converted at once (default: one per core).
+    #[arg(short, long)]
+    jobs: Option<usize>,
+    /// ZSTD compression level.
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
+    zstd_level: i32,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum LayoutArg {
+    PerLog,
+    Hive,
+}
+
+pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
+    let options = ParquetOptions {
+        zstd_level: args.zstd_level,
+        topics: args.messages.clone(),
+        window: Window::seconds(args.start, args.end),
+        layout: match args.layout {
+            LayoutArg::PerLog => Layout::PerLog,
+            LayoutArg::Hive => Layout::Hive,
+        },
+        ..ParquetOptions::default()
+    };
+    // Refused here rather than once per log.
+    options
+        .properties(Vec::new())
+        .map_err(|e| Failure::exit(2, format!("--zstd-level {}: {e}", args.zstd_level)))?;
+    let total: u64 = args
+        .files
+        .iter()
+        .filter_map(|p| std::fs::metadata(p).ok())
+        .map(|m| m.len())
+        .sum();
+    let mut converter = Converter::new(&args.output, options);
+    let progress = std::io::stderr().is_terminal() && total > 64 << 20;
+    if progress {
+        let read = Arc::new(AtomicU64::new(0));
+        converter = converter.on_progress(move |bytes| {
+            let done = read.fetch_add(bytes, Ordering::Relaxed) + bytes;
+            eprint!(
+                "\r{:3}% of {} MB",
+                done * 100 / total.max(1),
+                total.div_ceil(1 << 20)
+            );
+        });
+    }
+    let threads = args
+        .jobs
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let results = converter.convert_files(&args.files, threads);
+    if progress {
+        eprintln!();
+    }
+    let mut failed = 0;
+    let mut topics_seen = std::collections::HashSet::new();
+    for (path, result) in args.files.iter().zip(&results) {
+        match result {
+            Ok(c) => {
+                let rows: usize = c.files.iter().map(|f| f.rows).sum();
+                writeln!(
+                    out,
+                    "{}: {} files, {rows} rows, {}",
+                    path.display(),
+                    c.files.len(),
+                    c.metadata.display()
+                )?;
+                for note in &c.notes {
+                    eprintln!("ulog: {}: {note}", path.display());
+                }
+                crate::report_skipped(
+                    &c.skipped,
+                    path,
+                    &args.messages,
+                    c.files.is_empty().then_some("Parquet"),
+                );
+                topics_seen.extend(c.files.iter().map(|f| f.topic.clone()));
+            }
+            Err(e) => {
+                failed += 1;
+                eprintln!("ulog: {e}");
+            }
+        }
+    }
+    for topic in &args.messages {
+        if !topics_seen.contains(topic) {
+            eprintln!("ulog: no log has rows of topic `{topic}`");
+        }
+    }
+    if failed > 0 {
+        return Err(Failure::exit(
+            1,
+            format!("{failed} of {} logs not converted", args.files.len()),
+        ));
+    }
+    Ok(())
+}

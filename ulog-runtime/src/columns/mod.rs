@@ -1,0 +1,684 @@
+//! One topic instance as typed columns, in pyulog's names and order: the answer to "give me
+//! `voltage_v` as a vector". No dependencies; [`csv`] writes them as pyulog's `ulog2csv`
+//! does, [`arrow`] (feature `arrow`) makes record batches of them and [`parquet`] (feature
+//! `parquet`) Parquet files.
+//!
+//! The columns of a format ([`ColumnSpec`]): `timestamp` first (the row's timestamp in µs as
+//! `u64`, unwrapped for version-0 logs), then every leaf in format order, named as pyulog
+//! names them (`q[0]`, `esc[3].esc_rpm`), padding hidden, each `char[N]` array one text
+//! column (the bytes up to the first zero, each as one character, as pyulog's `ulog2csv`
+//! shows them). [`ColumnBuilder`] fills them row by row in one pass, one type dispatch per
+//! run of same-typed leaves, and hands them over in batches of any size.
+//!
+//! ```
+//! use ulog_runtime::{Log, ULog, Writer, WriterOptions};
+//!
+//! #[derive(ULog)]
+//! struct Battery { timestamp: u64, voltage_v: f32, cells: [u16; 2] }
+//!
+//! let mut w = Writer::new(Vec::new(), WriterOptions::default())?;
+//! let sub = w.topic::<Battery>(0)?;
+//! for t in 1..=3 {
+//!     w.write(&sub, &Battery { timestamp: t, voltage_v: 15.0 + t as f32, cells: [3, 4] })?;
+//! }
+//! let log = Log::from_vec(w.into_inner())?;
+//! let columns = log.columns("battery", 0).unwrap();
+//! assert_eq!(columns.names().collect::<Vec<_>>(), ["timestamp", "voltage_v", "cells[0]", "cells[1]"]);
+//! assert_eq!(columns.get("voltage_v").unwrap().as_f32(), Some(&[16.0, 17.0, 18.0][..]));
+//! assert_eq!(columns.get("timestamp").unwrap().as_u64(), Some(&[1, 2, 3][..]));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+#[cfg(feature = "arrow")]
+pub mod arrow;
+pub mod csv;
+#[cfg(feature = "parquet")]
+pub mod parquet;
+
+use std::sync::Arc;
+
+use crate::read::{Log, Subscription};
+use crate::schema::{FieldKind, FormatId, Primitive, Schema};
+use crate::value::{PlanError, RowPlan};
+
+/// What one column holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ColumnKind {
+    /// Values of a basic type (`char` scalars as their byte).
+    Value(Primitive),
+    /// A `char[N]` array as text.
+    Text {
+        /// `N`.
+        len: usize,
+    },
+}
+
+/// One column of a format: its name, kind and place in the row.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ColumnDef {
+    /// pyulog's name: `timestamp`, `q[0]`, `esc[3].esc_rpm`, `name` (a `char` array).
+    pub name: String,
+    /// What it holds.
+    pub kind: ColumnKind,
+    /// The ULog type of the field it comes from, as a format spells it (`float`,
+    /// `char[10]`, `uint32_t`; the timestamp column's file type even when it is unwrapped to
+    /// `u64`).
+    pub ulog_type: String,
+    /// Where its values come from.
+    pub source: Source,
+    /// The byte offset of the field in the row (the timestamp's too).
+    pub offset: usize,
+}
+
+/// Where a column's values come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Source {
+    /// The row's timestamp, µs (the `timestamp` field, unwrapped for version-0 logs).
+    Timestamp,
+    /// Bytes of the row at this offset.
+    Offset(usize),
+}
+
+/// The columns of one format ([module docs](self)).
+#[derive(Debug, Clone)]
+pub struct ColumnSpec {
+    format: String,
+    columns: Vec<ColumnDef>,
+    /// The leaves in row order, merged into runs of one type: (offset, count, type, index of
+    /// the first column among the columns of that type).
+    runs: Vec<(usize, usize, Primitive, usize)>,
+    /// Text columns: (offset, len).
+    texts: Vec<(usize, usize)>,
+    /// Per column, in output order: its type store and index there.
+    slots: Vec<Slot>,
+    /// Columns per type store.
+    counts: [usize; STORES],
+    /// The timestamp column's index in the `u64` store, if the format has a timestamp.
+    timestamp: Option<usize>,
+}
+
+/// The typed stores: one per basic type, and text.
+const STORES: usize = 13;
+const TEXT_STORE: usize = 12;
+
+#[derive(Debug, Clone, Copy)]
+struct Slot {
+    store: usize,
+    index: usize,
+}
+
+fn store_of(p: Primitive) -> usize {
+    match p {
+        Primitive::Int8 => 0,
+        Primitive::UInt8 => 1,
+        Primitive::Int16 => 2,
+        Primitive::UInt16 => 3,
+        Primitive::Int32 => 4,
+        Primitive::UInt32 => 5,
+        Primitive::Int64 => 6,
+        Primitive::UInt64 => 7,
+        Primitive::Float => 8,
+        Primitive::Double => 9,
+        Primitive::Bool => 10,
+        Primitive::Char => 11,
+    }
+}
+
+impl ColumnSpec {
+    /// The columns of format `id` of `schema` (its layout resolved if needed), padding hidden.
+    pub fn new(schema: &mut Schema, id: FormatId) -> Result<ColumnSpec, PlanError> {
+        RowPlan::check(schema, id)?;
+        Ok(ColumnSpec::from_checked(schema, id, false))
+    }
+
+    /// As pyulog's `ulog2csv` writes them: padding inside nested types shown (as bytes of
+    /// value 0 when written by PX4), only top-level padding hidden.
+    pub fn like_ulog2csv(schema: &mut Schema, id: FormatId) -> Result<ColumnSpec, PlanError> {
+        RowPlan::check(schema, id)?;
+        Ok(ColumnSpec::from_checked(schema, id, true))
+    }
+
+    /// The columns of a format of `schema` whose layout is resolved (every format a log
+    /// subscribes and can decode); `None` otherwise.
+    pub fn of(schema: &Schema, id: FormatId) -> Option<ColumnSpec> {
+        schema.resolved(id)?;
+        Some(ColumnSpec::from_checked(schema, id, false))
+    }
+
+    /// [`ColumnSpec::of`] as pyulog's `ulog2csv` writes them (see
+    /// [`ColumnSpec::like_ulog2csv`]).
+    pub fn of_ulog2csv(schema: &Schema, id: FormatId) -> Option<ColumnSpec> {
+        schema.resolved(id)?;
+        Some(ColumnSpec::from_checked(schema, id, true))
+    }
+
+    /// The columns of a format whose layout is resolved.
+    pub(crate) fn from_checked(schema: &Schema, id: FormatId, nested_padding: bool) -> ColumnSpec {
+        let mut leaves: Vec<(String, ColumnKind, String, usize)> = Vec::new();
+        flatten(schema, id, 0, "", true, nested_padding, &mut leaves);
+        let timestamp = leaves.iter().position(|(name, kind, _, _)| {
+            name == "timestamp" && matches!(kind, ColumnKind::Value(p) if p.is_unsigned_integer())
+        });
+        let mut spec = ColumnSpec {
+            format: schema.format(id).to_string(),
+            columns: Vec::with_capacity(leaves.len()),
+            runs: Vec::new(),
+            texts: Vec::new(),
+            slots: Vec::with_capacity(leaves.len()),
+            counts: [0; STORES],
+            timestamp: None,
+        };
+        // `timestamp` first, as ulog2csv writes it: the row's (unwrapped) timestamp.
+        let order = timestamp
+            .into_iter()
+            .chain((0..leaves.len()).filter(|&i| Some(i) != timestamp));
+        for i in order {
+            let (name, kind, ulog_type, offset) = leaves[i].clone();
+            let (kind, source) = if Some(i) == timestamp {
+                (ColumnKind::Value(Primitive::UInt64), Source::Timestamp)
+            } else {
+                (kind, Source::Offset(offset))
+            };
+            let store = match kind {
+                ColumnKind::Value(p) => store_of(p),
+                ColumnKind::Text { .. } => TEXT_STORE,
+            };
+            spec.slots.push(Slot {
+                store,
+                index: spec.counts[store],
+            });
+            spec.counts[store] += 1;
+            match (kind, source) {
+                (ColumnKind::Value(p), Source::Offset(at)) => {
+                    let first = spec.slots.last().expect("just pushed").index;
+                    match spec.runs.last_mut() {
+                        Some(run)
+                            if run.2 == p
+                                && run.0 + run.1 * p.size() == at
+                                && run.3 + run.1 == first =>
+                        {
+                            run.1 += 1;
+                        }
+                        _ => spec.runs.push((at, 1, p, first)),
+                    }
+                }
+                (ColumnKind::Text { len }, Source::Offset(at)) => spec.texts.push((at, len)),
+                (_, Source::Timestamp) => {
+                    spec.timestamp = Some(spec.slots.last().expect("just pushed").index);
+                }
+            }
+            spec.columns.push(ColumnDef {
+                name,
+                kind,
+                ulog_type,
+                source,
+                offset,
+            });
+        }
+        spec
+    }
+
+    /// The columns, in output order.
+    pub fn columns(&self) -> &[ColumnDef] {
+        &self.columns
+    }
+
+    /// The format's definition, as its `F` message has it.
+    pub fn format(&self) -> &str {
+        &self.format
+    }
+
+    /// Bytes of a row the columns read: rows shorter than this are not taken.
+    pub fn row_len(&self) -> usize {
+        let runs = self.runs.iter().map(|r| r.0 + r.1 * r.2.size());
+        let texts = self.texts.iter().map(|t| t.0 + t.1);
+        runs.chain(texts).max().unwrap_or(0)
+    }
+}
+
+/// Every leaf of a format: (name, kind, ULog type, offset), depth first; `char` arrays as
+/// one text leaf; padding left out (only at the top with `nested_padding`).
+fn flatten(
+    schema: &Schema,
+    id: FormatId,
+    base: usize,
+    prefix: &str,
+    top: bool,
+    nested_padding: bool,
+    out: &mut Vec<(String, ColumnKind, String, usize)>,
+) {
+    let Some(layout) = schema.resolved(id) else {
+        return;
+    };
+    for f in &layout.fields {
+        if f.padding && (top || !nested_padding) {
+            continue;
+        }
+        let start = base + f.offset;
+        match (f.kind, f.array_len) {
+            (FieldKind::Primitive(Primitive::Char), Some(n)) => out.push((
+                format!("{prefix}{}", f.name),
+                ColumnKind::Text {
+                    len: usize::from(n),
+                },
+                format!("char[{n}]"),
+                start,
+            )),
+            (kind, len) => {
+                for i in 0..len.map_or(1, usize::from) {
+                    let name = match len {
+                        Some(_) => format!("{prefix}{}[{i}]", f.name),
+                        None => format!("{prefix}{}", f.name),
+                    };
+                    let offset = start + i * f.elem_size;
+                    match kind {
+                        FieldKind::Primitive(p) => {
+                            out.push((name, ColumnKind::Value(p), p.c_name().to_owned(), offset));
+                        }
+                        FieldKind::Nested(nested) => {
+                            let prefix = format!("{name}.");
+                            flatten(schema, nested, offset, &prefix, false, nested_padding, out);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The values of one column.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ColumnValues {
+    /// `int8_t`
+    Int8(Vec<i8>),
+    /// `uint8_t`
+    UInt8(Vec<u8>),
+    /// `int16_t`
+    Int16(Vec<i16>),
+    /// `uint16_t`
+    UInt16(Vec<u16>),
+    /// `int32_t`
+    Int32(Vec<i32>),
+    /// `uint32_t`
+    UInt32(Vec<u32>),
+    /// `int64_t`
+    Int64(Vec<i64>),
+    /// `uint64_t` (and the timestamp column)
+    UInt64(Vec<u64>),
+    /// `float`
+    Float(Vec<f32>),
+    /// `double`
+    Double(Vec<f64>),
+    /// `bool` (any non-zero byte is true)
+    Bool(Vec<bool>),
+    /// `char` (one byte; pyulog shows it as a signed byte)
+    Char(Vec<u8>),
+    /// `char[N]` as text
+    Text(Vec<String>),
+}
+
+macro_rules! accessors {
+    ($($name:ident: $variant:ident($ty:ty)),* $(,)?) => {
+        impl ColumnValues {
+            $(
+                #[doc = concat!("The values, if the column holds `", stringify!($ty), "`.")]
+                pub fn $name(&self) -> Option<&[$ty]> {
+                    match self {
+                        ColumnValues::$variant(v) => Some(v),
+                        _ => None,
+                    }
+                }
+            )*
+        }
+    };
+}
+
+accessors! {
+    as_i8: Int8(i8), as_u8: UInt8(u8), as_i16: Int16(i16), as_u16: UInt16(u16),
+    as_i32: Int32(i32), as_u32: UInt32(u32), as_i64: Int64(i64), as_u64: UInt64(u64),
+    as_f32: Float(f32), as_f64: Double(f64), as_bool: Bool(bool), as_char: Char(u8),
+    as_text: Text(String),
+}
+
+impl ColumnValues {
+    /// The number of values.
+    pub fn len(&self) -> usize {
+        match self {
+            ColumnValues::Int8(v) => v.len(),
+            ColumnValues::UInt8(v) | ColumnValues::Char(v) => v.len(),
+            ColumnValues::Int16(v) => v.len(),
+            ColumnValues::UInt16(v) => v.len(),
+            ColumnValues::Int32(v) => v.len(),
+            ColumnValues::UInt32(v) => v.len(),
+            ColumnValues::Int64(v) => v.len(),
+            ColumnValues::UInt64(v) => v.len(),
+            ColumnValues::Float(v) => v.len(),
+            ColumnValues::Double(v) => v.len(),
+            ColumnValues::Bool(v) => v.len(),
+            ColumnValues::Text(v) => v.len(),
+        }
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Every value as `f64` (`bool` as 0/1, `char` as a signed byte, 64-bit integers beyond
+    /// 2^53 rounded); `None` for text.
+    pub fn to_f64(&self) -> Option<Vec<f64>> {
+        Some(match self {
+            ColumnValues::Int8(v) => v.iter().map(|&x| f64::from(x)).collect(),
+            ColumnValues::UInt8(v) => v.iter().map(|&x| f64::from(x)).collect(),
+            ColumnValues::Int16(v) => v.iter().map(|&x| f64::from(x)).collect(),
+            ColumnValues::UInt16(v) => v.iter().map(|&x| f64::from(x)).collect(),
+            ColumnValues::Int32(v) => v.iter().map(|&x| f64::from(x)).collect(),
+            ColumnValues::UInt32(v) => v.iter().map(|&x| f64::from(x)).collect(),
+            ColumnValues::Int64(v) => v.iter().map(|&x| x as f64).collect(),
+            ColumnValues::UInt64(v) => v.iter().map(|&x| x as f64).collect(),
+            ColumnValues::Float(v) => v.iter().map(|&x| f64::from(x)).collect(),
+            ColumnValues::Double(v) => v.clone(),
+            ColumnValues::Bool(v) => v.iter().map(|&x| f64::from(u8::from(x))).collect(),
+            ColumnValues::Char(v) => v.iter().map(|&x| f64::from(x as i8)).collect(),
+            ColumnValues::Text(_) => return None,
+        })
+    }
+}
+
+/// The values of a table's columns, in the order of its [`ColumnSpec`].
+#[derive(Debug, Clone)]
+pub struct Columns {
+    spec: Arc<ColumnSpec>,
+    values: Vec<ColumnValues>,
+    rows: usize,
+}
+
+impl PartialEq for Columns {
+    fn eq(&self, other: &Columns) -> bool {
+        self.defs() == other.defs() && self.values == other.values
+    }
+}
+
+impl Columns {
+    /// The number of rows.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// The column names, in order.
+    pub fn names(&self) -> impl Iterator<Item = &str> {
+        self.defs().iter().map(|d| d.name.as_str())
+    }
+
+    /// The columns' definitions, in order.
+    pub fn defs(&self) -> &[ColumnDef] {
+        self.spec.columns()
+    }
+
+    /// The spec the columns were built by.
+    pub fn spec(&self) -> &Arc<ColumnSpec> {
+        &self.spec
+    }
+
+    /// The values of the column of this name.
+    pub fn get(&self, name: &str) -> Option<&ColumnValues> {
+        let i = self.defs().iter().position(|d| d.name == name)?;
+        Some(&self.values[i])
+    }
+
+    /// Every column: its definition and values.
+    pub fn iter(&self) -> impl Iterator<Item = (&ColumnDef, &ColumnValues)> {
+        self.defs().iter().zip(&self.values)
+    }
+
+    /// The values, in column order, taken out.
+    pub fn into_values(self) -> Vec<ColumnValues> {
+        self.values
+    }
+}
+
+/// Fills the columns of a [`ColumnSpec`] row by row, in one pass ([module docs](self)).
+#[derive(Debug, Clone)]
+pub struct ColumnBuilder {
+    spec: Arc<ColumnSpec>,
+    need: usize,
+    stores: Stores,
+    rows: usize,
+    /// Rows each column has room for after a [`ColumnBuilder::take`].
+    capacity: usize,
+}
+
+/// One vector per column, grouped by type.
+#[derive(Debug, Clone, Default)]
+struct Stores {
+    i8: Vec<Vec<i8>>,
+    u8: Vec<Vec<u8>>,
+    i16: Vec<Vec<i16>>,
+    u16: Vec<Vec<u16>>,
+    i32: Vec<Vec<i32>>,
+    u32: Vec<Vec<u32>>,
+    i64: Vec<Vec<i64>>,
+    u64: Vec<Vec<u64>>,
+    f32: Vec<Vec<f32>>,
+    f64: Vec<Vec<f64>>,
+    bool: Vec<Vec<bool>>,
+    char: Vec<Vec<u8>>,
+    text: Vec<Vec<String>>,
+}
+
+impl Stores {
+    fn new(counts: &[usize; STORES], capacity: usize) -> Stores {
+        fn make<T>(n: usize, capacity: usize) -> Vec<Vec<T>> {
+            (0..n).map(|_| Vec::with_capacity(capacity)).collect()
+        }
+        Stores {
+            i8: make(counts[0], capacity),
+            u8: make(counts[1], capacity),
+            i16: make(counts[2], capacity),
+            u16: make(counts[3], capacity),
+            i32: make(counts[4], capacity),
+            u32: make(counts[5], capacity),
+            i64: make(counts[6], capacity),
+            u64: make(counts[7], capacity),
+            f32: make(counts[8], capacity),
+            f64: make(counts[9], capacity),
+            bool: make(counts[10], capacity),
+            char: make(counts[11], capacity),
+            text: make(counts[TEXT_STORE], capacity),
+        }
+    }
+}
+
+impl ColumnBuilder {
+    /// An empty builder.
+    pub fn new(spec: impl Into<Arc<ColumnSpec>>) -> ColumnBuilder {
+        ColumnBuilder::with_capacity(spec, 0)
+    }
+
+    /// An empty builder with room for `rows` rows in every column (and after each
+    /// [`ColumnBuilder::take`]).
+    pub fn with_capacity(spec: impl Into<Arc<ColumnSpec>>, rows: usize) -> ColumnBuilder {
+        let spec = spec.into();
+        ColumnBuilder {
+            need: spec.row_len(),
+            stores: Stores::new(&spec.counts, rows),
+            spec,
+            rows: 0,
+            capacity: rows,
+        }
+    }
+
+    /// Rows taken since the last [`ColumnBuilder::take`].
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// The spec it builds by.
+    pub fn spec(&self) -> &Arc<ColumnSpec> {
+        &self.spec
+    }
+
+    /// Adds one row: its packed bytes (as a [`Row`](crate::Row)'s `data`) and its timestamp.
+    /// Returns `false`, adding nothing, if `data` is shorter than the columns need.
+    #[inline]
+    pub fn push(&mut self, data: &[u8], timestamp: u64) -> bool {
+        let Some(data) = data.get(..self.need) else {
+            return false;
+        };
+        let s = &mut self.stores;
+        if let Some(ts) = self.spec.timestamp {
+            s.u64[ts].push(timestamp);
+        }
+        for &(at, n, p, first) in &self.spec.runs {
+            macro_rules! take {
+                ($store:ident, $ty:ty) => {{
+                    const SIZE: usize = size_of::<$ty>();
+                    let bytes = &data[at..at + n * SIZE];
+                    let (chunks, _) = bytes.as_chunks::<SIZE>();
+                    for (col, c) in s.$store[first..first + n].iter_mut().zip(chunks) {
+                        col.push(<$ty>::from_le_bytes(*c));
+                    }
+                }};
+            }
+            match p {
+                Primitive::Int8 => take!(i8, i8),
+                Primitive::UInt8 => take!(u8, u8),
+                Primitive::Int16 => take!(i16, i16),
+                Primitive::UInt16 => take!(u16, u16),
+                Primitive::Int32 => take!(i32, i32),
+                Primitive::UInt32 => take!(u32, u32),
+                Primitive::Int64 => take!(i64, i64),
+                Primitive::UInt64 => take!(u64, u64),
+                Primitive::Float => take!(f32, f32),
+                Primitive::Double => take!(f64, f64),
+                Primitive::Bool => {
+                    for (col, &b) in s.bool[first..first + n].iter_mut().zip(&data[at..at + n]) {
+                        col.push(b != 0);
+                    }
+                }
+                Primitive::Char => {
+                    for (col, &b) in s.char[first..first + n].iter_mut().zip(&data[at..at + n]) {
+                        col.push(b);
+                    }
+                }
+            }
+        }
+        for (col, &(at, len)) in s.text.iter_mut().zip(&self.spec.texts) {
+            col.push(text(&data[at..at + len]));
+        }
+        self.rows += 1;
+        true
+    }
+
+    /// The columns of the rows taken so far; the builder starts again empty (for batches of
+    /// a bounded size).
+    pub fn take(&mut self) -> Columns {
+        let fresh = Stores::new(&self.spec.counts, self.capacity);
+        let mut s = std::mem::replace(&mut self.stores, fresh);
+        let rows = std::mem::take(&mut self.rows);
+        let values = self
+            .spec
+            .slots
+            .iter()
+            .map(|&Slot { store, index: i }| match store {
+                0 => ColumnValues::Int8(std::mem::take(&mut s.i8[i])),
+                1 => ColumnValues::UInt8(std::mem::take(&mut s.u8[i])),
+                2 => ColumnValues::Int16(std::mem::take(&mut s.i16[i])),
+                3 => ColumnValues::UInt16(std::mem::take(&mut s.u16[i])),
+                4 => ColumnValues::Int32(std::mem::take(&mut s.i32[i])),
+                5 => ColumnValues::UInt32(std::mem::take(&mut s.u32[i])),
+                6 => ColumnValues::Int64(std::mem::take(&mut s.i64[i])),
+                7 => ColumnValues::UInt64(std::mem::take(&mut s.u64[i])),
+                8 => ColumnValues::Float(std::mem::take(&mut s.f32[i])),
+                9 => ColumnValues::Double(std::mem::take(&mut s.f64[i])),
+                10 => ColumnValues::Bool(std::mem::take(&mut s.bool[i])),
+                11 => ColumnValues::Char(std::mem::take(&mut s.char[i])),
+                _ => ColumnValues::Text(std::mem::take(&mut s.text[i])),
+            })
+            .collect();
+        Columns {
+            spec: self.spec.clone(),
+            values,
+            rows,
+        }
+    }
+}
+
+/// The rows of a time window, as pyulog's `ulog2csv` takes them: from the first row at or
+/// after `start` to the last before the first row at or after `end` (times in µs).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Window {
+    /// Rows from this time on (µs).
+    pub start_us: Option<f64>,
+    /// Rows before this time (µs).
+    pub end_us: Option<f64>,
+}
+
+/// What to do with one row of a [`Window`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Admit {
+    /// Before the window: leave it out.
+    Skip,
+    /// In the window.
+    Take,
+    /// The window has ended: leave out this row and the rest.
+    Stop,
+}
+
+impl Window {
+    /// A window from `start` to `end` seconds.
+    pub fn seconds(start: Option<f64>, end: Option<f64>) -> Window {
+        Window {
+            start_us: start.map(|s| s * 1e6),
+            end_us: end.map(|s| s * 1e6),
+        }
+    }
+
+    /// Whether to take the next row of one topic instance, given whether an earlier row of
+    /// it was taken (`started`).
+    pub fn admit(&self, timestamp: u64, started: bool) -> Admit {
+        let t = timestamp as f64;
+        if !started && self.start_us.is_some_and(|s| t < s) {
+            return Admit::Skip;
+        }
+        if self.end_us.is_some_and(|e| t >= e) {
+            return Admit::Stop;
+        }
+        Admit::Take
+    }
+}
+
+/// A `char[N]` value as pyulog's `ulog2csv` shows it: the bytes up to the first zero, each
+/// as one character (`chr(byte)`).
+pub fn text(bytes: &[u8]) -> String {
+    bytes
+        .iter()
+        .take_while(|&&b| b != 0)
+        .map(|&b| char::from(b))
+        .collect()
+}
+
+impl Log<'_> {
+    /// The columns of one topic instance (every subscription of that name and `multi_id`,
+    /// in file order); `None` if the log has no such instance or its format cannot be read.
+    pub fn columns(&self, topic: &str, multi_id: u8) -> Option<Columns> {
+        let subs: Vec<&Subscription> = self
+            .subscriptions()
+            .iter()
+            .filter(|s| s.name == topic && s.multi_id == multi_id && s.format().is_some())
+            .collect();
+        let id = subs.first()?.format()?;
+        let spec = ColumnSpec::from_checked(self.metadata().schema(), id, false);
+        let rows = subs.iter().map(|s| self.rows(s).len()).sum();
+        let mut builder = ColumnBuilder::with_capacity(spec, rows);
+        for sub in subs {
+            for row in self.rows(sub) {
+                builder.push(row.data, row.timestamp);
+            }
+        }
+        Some(builder.take())
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,490 @@
+//! Parquet files of topic instances (feature `parquet`, parquet-rs 60 with ZSTD): one file
+//! per topic instance, its columns as [`columns::arrow`](super::arrow) types them, and the
+//! log's identity in the file's key-value metadata.
+//!
+//! - [`write_topic`]: one topic instance of a whole-file [`Log`] to any writer.
+//! - [`Converter`]: whole logs to a folder in one streaming pass each (memory bounded by
+//!   [`ParquetOptions::buffer_bytes`], not by the log), with a `metadata.json` per log, in
+//!   one of two [`Layout`]s; many logs in parallel ([`Converter::convert_files`]).
+//!
+//! Every file's key-value metadata (what DuckDB's `parquet_kv_metadata` and pyarrow's
+//! `schema.metadata` show) holds:
+//!
+//! | key | value |
+//! |---|---|
+//! | `ulog.file_name` | the log's file name |
+//! | `ulog.sha256` | SHA-256 of the whole log file, hex |
+//! | `ulog.sys_name`, `ulog.ver_sw`, `ulog.ver_hw` | those info values, when the log has them |
+//! | `ulog.start_timestamp` | the header's start time, µs |
+//! | `ulog.start_utc` | the start as a UTC date, from the header when it holds one, otherwise from the first GPS fix (`time_utc_usec` of `vehicle_gps_position` or `sensor_gps`) |
+//! | `ulog.topic`, `ulog.multi_id`, `ulog.format` | the table's topic, instance and format |
+//!
+//! The Arrow schema stored with the file also carries each column's ULog type
+//! (`ulog.type`).
+
+mod convert;
+mod fleet;
+#[cfg(test)]
+mod tests;
+
+use std::io::Write;
+
+use parquet::arrow::ArrowWriter;
+use parquet::basic::{Compression, ZstdLevel};
+use parquet::errors::ParquetError;
+use parquet::file::metadata::KeyValue;
+use parquet::file::properties::{EnabledStatistics, WriterProperties};
+
+pub use convert::{Conversion, ConvertError, Converter, WrittenFile};
+pub use fleet::Layout;
+
+use super::{ColumnBuilder, ColumnSpec, Window, arrow::record_batch};
+use crate::read::{Log, Metadata, Row, Subscription};
+use crate::schema::{FieldKind, Primitive, Schema};
+
+/// How Parquet files are written.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParquetOptions {
+    /// ZSTD level (1, the parquet-rs default, to 22; negative levels are faster still).
+    pub zstd_level: i32,
+    /// Most rows in one row group.
+    pub row_group_rows: usize,
+    /// Memory for the rows waiting for their row group, all files of one log together:
+    /// when they pass it, the table holding most is encoded and written as a row group.
+    /// Peak memory of a conversion is about twice this (the rows, and one row group being
+    /// encoded), plus [`ParquetOptions::batch_bytes`] per topic instance, plus the log's
+    /// own metadata (formats, parameters, logged messages).
+    pub buffer_bytes: usize,
+    /// Row data collected per topic instance before it is encoded (a batch; at least one
+    /// row).
+    pub batch_bytes: usize,
+    /// Dictionary encoding (off: flight data rarely repeats enough to gain from it, and
+    /// dictionaries hold memory).
+    pub dictionary: bool,
+    /// Page statistics (min/max per page and a page index) as well as per row group.
+    pub page_statistics: bool,
+    /// Only these topics (all if empty).
+    pub topics: Vec<String>,
+    /// Only the rows of this window.
+    pub window: Window,
+    /// Where the files of a conversion go.
+    pub layout: Layout,
+}
+
+impl Default for ParquetOptions {
+    fn default() -> ParquetOptions {
+        ParquetOptions {
+            zstd_level: 1,
+            row_group_rows: 1 << 20,
+            buffer_bytes: 16 << 20,
+            batch_bytes: 64 << 10,
+            dictionary: false,
+            page_statistics: true,
+            topics: Vec::new(),
+            window: Window::default(),
+            layout: Layout::PerLog,
+        }
+    }
+}
+
+impl ParquetOptions {
+    /// The writer properties, with `metadata` as the file's key-value metadata.
+    pub fn properties(&self, metadata: Vec<KeyValue>) -> Result<WriterProperties, ParquetError> {
+        Ok(WriterProperties::builder()
+            .set_compression(Compression::ZSTD(ZstdLevel::try_new(self.zstd_level)?))
+            .set_max_row_group_row_count(Some(self.row_group_rows.max(1)))
+            .set_dictionary_enabled(self.dictionary)
+            .set_data_page_size_limit(64 << 10)
+            .set_statistics_enabled(if self.page_statistics {
+                EnabledStatistics::Page
+            } else {
+                EnabledStatistics::Chunk
+            })
+            .set_created_by(format!(
+                "ulog-runtime {} (parquet-rs)",
+                env!("CARGO_PKG_VERSION")
+            ))
+            .set_key_value_metadata((!metadata.is_empty()).then_some(metadata))
+            .build())
+    }
+
+    /// Whether topic `name` is converted.
+    pub fn wants(&self, name: &str) -> bool {
+        self.topics.is_empty() || self.topics.iter().any(|t| t == name)
+    }
+
+    /// Rows per batch for rows of `row_size` bytes.
+    fn batch_rows(&self, row_size: usize) -> usize {
+        (self.batch_bytes / row_size.max(1)).clamp(1, 64 * 1024)
+    }
+}
+
+/// Who a log is, as each of its Parquet files says (see the [module docs](self)).
+#[derive(Debug, Clone, PartialEq, Eq, Default, serde::Serialize)]
+pub struct LogIdentity {
+    /// The log's file name.
+    pub file_name: String,
+    /// SHA-256 of the whole file, hex.
+    pub sha256: String,
+    /// Info `sys_name`.
+    pub sys_name: Option<String>,
+    /// Info `ver_sw`.
+    pub ver_sw: Option<String>,
+    /// Info `ver_hw`.
+    pub ver_hw: Option<String>,
+    /// The header's start time, µs.
+    pub start_timestamp: u64,
+    /// The start as a UTC date (see the [module docs](self)).
+    pub start_utc: Option<String>,
+}
+
+impl LogIdentity {
+    /// The identity of a log read from `meta`, with its file name and digest; `start_utc`
+    /// from the header if it holds a date, else from `gps_utc_start` (see [`GpsClock`]).
+    pub fn new(
+        meta: &Metadata,
+        file_name: &str,
+        sha256: &[u8],
+        gps_utc_start: Option<u64>,
+    ) -> LogIdentity {
+        let text = |key: &str| match meta.info_value(key) {
+            Some(crate::Value::String(s)) => Some(s.clone()),
+            _ => None,
+        };
+        let header = meta.header();
+        let start_utc = header
+            .start_utc()
+            .or_else(|| gps_utc_start.map(crate::read::UtcTime::from_unix_us));
+        LogIdentity {
+            file_name: file_name.to_owned(),
+            sha256: sha256.iter().map(|b| format!("{b:02x}")).collect(),
+            sys_name: text("sys_name"),
+            ver_sw: text("ver_sw"),
+            ver_hw: text("ver_hw"),
+            start_timestamp: header.start_timestamp,
+            start_utc: start_utc.map(|t| t.to_string()),
+        }
+    }
+
+    /// The identity of a whole-file log (its bytes hashed, its GPS rows read for the date).
+    pub fn of_log(log: &Log<'_>, file_name: &str) -> LogIdentity {
+        use sha2::Digest;
+        let digest = sha2::Sha256::digest(log.bytes());
+        let mut clock = GpsClock::new(log.metadata().header().start_timestamp);
+        for sub in log.subscriptions() {
+            if clock.start().is_some() {
+                break;
+            }
+            if let Some(at) = GpsClock::field(log.metadata().schema(), sub) {
+                for row in log.rows(sub) {
+                    if clock.watch(&row, at) {
+                        break;
+                    }
+                }
+            }
+        }
+        LogIdentity::new(log.metadata(), file_name, &digest, clock.start())
+    }
+
+    /// The key-value metadata that says which log a table comes from.
+    pub fn key_values(&self) -> Vec<KeyValue> {
+        let mut kv = vec![
+            KeyValue::new("ulog.file_name".to_owned(), self.file_name.clone()),
+            KeyValue::new("ulog.sha256".to_owned(), self.sha256.clone()),
+        ];
+        for (key, value) in [
+            ("ulog.sys_name", &self.sys_name),
+            ("ulog.ver_sw", &self.ver_sw),
+            ("ulog.ver_hw", &self.ver_hw),
+            ("ulog.start_utc", &self.start_utc),
+        ] {
+            if let Some(v) = value {
+                kv.push(KeyValue::new(key.to_owned(), v.clone()));
+            }
+        }
+        kv.push(KeyValue::new(
+            "ulog.start_timestamp".to_owned(),
+            self.start_timestamp.to_string(),
+        ));
+        kv
+    }
+}
+
+/// The key-value metadata that says what a table holds: topic, instance and format.
+fn table_key_values(topic: &str, multi_id: u8, format: &str) -> Vec<KeyValue> {
+    vec![
+        KeyValue::new("ulog.topic".to_owned(), topic.to_owned()),
+        KeyValue::new("ulog.multi_id".to_owned(), multi_id.to_string()),
+        KeyValue::new("ulog.format".to_owned(), format.to_owned()),
+    ]
+}
+
+/// The UTC time of a log's start from its first GPS fix: `time_utc_usec` of
+/// `vehicle_gps_position` or `sensor_gps`, less the time from the log's start to that row.
+#[derive(Debug, Clone, Copy)]
+pub struct GpsClock {
+    log_start: u64,
+    start: Option<u64>,
+}
+
+impl GpsClock {
+    /// Topics whose `time_utc_usec` is read.
+    pub const TOPICS: [&str; 2] = ["vehicle_gps_position", "sensor_gps"];
+
+    /// A clock for a log whose header says it started at `log_start` µs.
+    pub fn new(log_start: u64) -> GpsClock {
+        GpsClock {
+            log_start,
+            start: None,
+        }
+    }
+
+    /// The offset of the `uint64_t time_utc_usec` field of a subscription's rows, if it is
+    /// one of [`GpsClock::TOPICS`] and has one.
+    pub fn field(schema: &Schema, sub: &Subscription) -> Option<usize> {
+        if !GpsClock::TOPICS.contains(&sub.name.as_str()) {
+            return None;
+        }
+        let layout = schema.resolved(sub.format()?)?;
+        layout
+            .fields
+            .iter()
+            .find(|f| {
+                f.name == "time_utc_usec"
+                    && f.array_len.is_none()
+                    && f.kind == FieldKind::Primitive(Primitive::UInt64)
+            })
+            .map(|f| f.offset)
+    }
+
+    /// Reads a row whose `time_utc_usec` is at `at`; returns whether the clock is set.
+    pub fn watch(&mut self, row: &Row<'_>, at: usize) -> bool {
+        // 2000-01-01 in µs: a GPS without a fix reports 0.
+        const Y2000_US: u64 = 946_684_800_000_000;
+        if self.start.is_none()
+            && let Some(b) = row.data.get(at..at + 8)
+        {
+            let utc = u64::from_le_bytes(b.try_into().expect("8 bytes"));
+            if utc >= Y2000_US {
+                let since_start = row.timestamp.saturating_sub(self.log_start);
+                self.start = Some(utc.saturating_sub(since_start));
+            }
+        }
+        self.start.is_some()
+    }
+
+    /// The log's start in UTC, µs since 1970, once a fix was seen.
+    pub fn start(&self) -> Option<u64> {
+        self.start
+    }
+}
+
+/// What was written of one table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TableWritten {
+    /// Rows written.
+    pub rows: usize,
+    /// Row groups written.
+    pub row_groups: usize,
+}
+
+/// Writes one topic instance of a whole-file log (every subscription of that name and
+/// `multi_id`, rows of `options.window` only) as a Parquet file to `out`, with `identity`
+/// in its key-value metadata. `None` if the log has no such instance or cannot decode it.
+///
+/// ```
+/// use ulog_runtime::{Log, ULog, Writer, WriterOptions};
+/// use ulog_runtime::columns::parquet::{LogIdentity, ParquetOptions, write_topic};
+///
+/// #[derive(ULog)]
+/// struct Battery { timestamp: u64, voltage_v: f32 }
+///
+/// let mut w = Writer::new(Vec::new(), WriterOptions::default())?;
+/// let sub = w.topic::<Battery>(0)?;
+/// w.write(&sub, &Battery { timestamp: 1, voltage_v: 16.2 })?;
+/// let log = Log::from_vec(w.into_inner())?;
+/// let identity = LogIdentity::of_log(&log, "flight.ulg");
+/// let mut file = Vec::new();
+/// let written = write_topic(&log, "battery", 0, &identity, &mut file, &ParquetOptions::default())
+///     .unwrap()?;
+/// assert_eq!(written.rows, 1);
+/// assert_eq!(&file[..4], b"PAR1");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn write_topic<W: Write + Send>(
+    log: &Log<'_>,
+    topic: &str,
+    multi_id: u8,
+    identity: &LogIdentity,
+    out: W,
+    options: &ParquetOptions,
+) -> Option<Result<TableWritten, ParquetError>> {
+    let subs: Vec<&Subscription> = log
+        .subscriptions()
+        .iter()
+        .filter(|s| s.name == topic && s.multi_id == multi_id && s.format().is_some())
+        .collect();
+    let id = subs.first()?.format()?;
+    let spec = ColumnSpec::of(log.metadata().schema(), id)?;
+    let mut table = match Table::new(spec, topic, multi_id, out, options) {
+        Ok(t) => t,
+        Err(e) => return Some(Err(e)),
+    };
+    let rows = subs.iter().flat_map(|s| log.rows(s));
+    let result = (|| {
+        for row in rows {
+            match table.admit(row.timestamp) {
+                AdmitRow::Skip => continue,
+                AdmitRow::Stop => break,
+                AdmitRow::Take => {}
+            }
+            table.push(row.data, row.timestamp)?;
+        }
+        table.close(identity)
+    })();
+    Some(result)
+}
+
+/// One table being written: rows collected into batches, batches held until they make a
+/// row group, each row group encoded and written at once. (A row group in progress holds
+/// a ZSTD context per column, a few hundred kilobytes each once it has compressed a page:
+/// encoding row groups one at a time, instead of keeping one open per table, is what keeps
+/// a conversion of a log with thousands of columns within its budget.)
+struct Table<W: Write + Send> {
+    builder: ColumnBuilder,
+    schema: arrow_schema::SchemaRef,
+    writer: ArrowWriter<W>,
+    batch_rows: usize,
+    row_group_rows: usize,
+    /// Batches of the next row group.
+    pending: Vec<arrow_array::RecordBatch>,
+    pending_rows: usize,
+    pending_bytes: usize,
+    window: Window,
+    started: bool,
+    stopped: bool,
+    rows: usize,
+}
+
+/// What to do with a row of a table.
+enum AdmitRow {
+    Skip,
+    Take,
+    Stop,
+}
+
+impl<W: Write + Send> Table<W> {
+    fn new(
+        spec: ColumnSpec,
+        topic: &str,
+        multi_id: u8,
+        out: W,
+        options: &ParquetOptions,
+    ) -> Result<Table<W>, ParquetError> {
+        let schema = super::arrow::schema(&spec, topic);
+        let kv = table_key_values(topic, multi_id, spec.format());
+        let row_group_rows = options.row_group_rows.max(1);
+        let batch_rows = options.batch_rows(spec.row_len()).min(row_group_rows);
+        let writer = ArrowWriter::try_new(out, schema.clone(), Some(options.properties(kv)?))?;
+        Ok(Table {
+            builder: ColumnBuilder::with_capacity(spec, batch_rows),
+            schema,
+            writer,
+            batch_rows,
+            row_group_rows,
+            pending: Vec::new(),
+            pending_rows: 0,
+            pending_bytes: 0,
+            window: options.window,
+            started: false,
+            stopped: false,
+            rows: 0,
+        })
+    }
+
+    /// Whether to take the next row, by the window.
+    #[inline]
+    fn admit(&mut self, timestamp: u64) -> AdmitRow {
+        if self.stopped {
+            return AdmitRow::Stop;
+        }
+        match self.window.admit(timestamp, self.started) {
+            super::Admit::Skip => AdmitRow::Skip,
+            super::Admit::Take => {
+                self.started = true;
+                AdmitRow::Take
+            }
+            super::Admit::Stop => {
+                self.stopped = true;
+                AdmitRow::Stop
+            }
+        }
+    }
+
+    /// Adds a row; returns whether a batch was completed (and the table's memory changed).
+    #[inline]
+    fn push(&mut self, data: &[u8], timestamp: u64) -> Result<bool, ParquetError> {
+        if self.builder.push(data, timestamp) {
+            self.rows += 1;
+            if self.builder.rows() >= self.batch_rows {
+                self.seal()?;
+                return Ok(true);
+            }
+        }
+        Ok(false)
+    }
+
+    /// Makes a batch of the rows collected; writes a row group first if the batch would
+    /// make the pending one too long.
+    fn seal(&mut self) -> Result<(), ParquetError> {
+        let rows = self.builder.rows();
+        if rows == 0 {
+            return Ok(());
+        }
+        if self.pending_rows > 0 && self.pending_rows + rows > self.row_group_rows {
+            self.write_row_group()?;
+        }
+        let batch = record_batch(&self.schema, self.builder.take())?;
+        self.pending_bytes += batch.get_array_memory_size();
+        self.pending_rows += rows;
+        self.pending.push(batch);
+        Ok(())
+    }
+
+    /// Memory the table holds: its batches waiting for their row group.
+    fn memory(&self) -> usize {
+        self.pending_bytes
+    }
+
+    /// Encodes and writes the pending batches as one row group.
+    fn write_row_group(&mut self) -> Result<(), ParquetError> {
+        if self.pending.is_empty() {
+            return Ok(());
+        }
+        for batch in self.pending.drain(..) {
+            self.writer.write(&batch)?;
+        }
+        self.pending_rows = 0;
+        self.pending_bytes = 0;
+        self.writer.flush()
+    }
+
+    /// Writes everything collected, as a row group.
+    fn flush(&mut self) -> Result<(), ParquetError> {
+        self.seal()?;
+        self.write_row_group()
+    }
+
+    /// Writes what is left and the footer, with the log's identity.
+    fn close(mut self, identity: &LogIdentity) -> Result<TableWritten, ParquetError> {
+        self.flush()?;
+        for kv in identity.key_values() {
+            self.writer.append_key_value_metadata(kv);
+        }
+        let meta = self.writer.close()?;
+        Ok(TableWritten {
+            rows: self.rows,
+            row_groups: meta.num_row_groups(),
+        })
+    }
+}

@@ -1,0 +1,156 @@
+//! Columns of hand-laid rows: names, order, types and values.
+
+use super::*;
+use crate::read::{FileHeader, Message};
+
+fn spec_of(formats: &[&str], root: &str, ulog2csv: bool) -> (Schema, ColumnSpec) {
+    let mut schema = Schema::new();
+    for f in formats {
+        schema.insert(f.parse().unwrap()).unwrap();
+    }
+    let id = schema.id(root).unwrap();
+    let spec = if ulog2csv {
+        ColumnSpec::like_ulog2csv(&mut schema, id).unwrap()
+    } else {
+        ColumnSpec::new(&mut schema, id).unwrap()
+    };
+    (schema, spec)
+}
+
+const FORMATS: [&str; 2] = [
+    "outer:float[2] q;uint64_t timestamp;inner[2] e;char[4] name;bool ok;char c;uint8_t[3] _padding0;",
+    "inner:int16_t a;uint8_t[2] _padding0;double b;",
+];
+
+fn row(q: [f32; 2], t: u64, e: [(i16, f64); 2], name: &[u8; 4], ok: u8, c: u8) -> Vec<u8> {
+    let mut r = Vec::new();
+    for x in q {
+        r.extend_from_slice(&x.to_le_bytes());
+    }
+    r.extend_from_slice(&t.to_le_bytes());
+    for (a, b) in e {
+        r.extend_from_slice(&a.to_le_bytes());
+        r.extend_from_slice(&[0xAA, 0xBB]);
+        r.extend_from_slice(&b.to_le_bytes());
+    }
+    r.extend_from_slice(name);
+    r.extend_from_slice(&[ok, c]);
+    r
+}
+
+#[test]
+fn names_order_and_kinds_follow_pyulog() {
+    let (_, spec) = spec_of(&FORMATS, "outer", false);
+    let names: Vec<(&str, &str)> = spec
+        .columns()
+        .iter()
+        .map(|c| (c.name.as_str(), c.ulog_type.as_str()))
+        .collect();
+    assert_eq!(
+        names,
+        [
+            ("timestamp", "uint64_t"),
+            ("q[0]", "float"),
+            ("q[1]", "float"),
+            ("e[0].a", "int16_t"),
+            ("e[0].b", "double"),
+            ("e[1].a", "int16_t"),
+            ("e[1].b", "double"),
+            ("name", "char[4]"),
+            ("ok", "bool"),
+            ("c", "char"),
+        ]
+    );
+    assert_eq!(spec.columns()[7].kind, ColumnKind::Text { len: 4 });
+    // As ulog2csv: the padding of nested types shown, the top-level one not.
+    let (_, csv) = spec_of(&FORMATS, "outer", true);
+    let names: Vec<&str> = csv.columns().iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(
+        names[3..7],
+        ["e[0].a", "e[0]._padding0[0]", "e[0]._padding0[1]", "e[0].b"]
+    );
+}
+
+#[test]
+fn rows_fill_typed_columns_in_batches() {
+    let (_, spec) = spec_of(&FORMATS, "outer", false);
+    let mut b = ColumnBuilder::with_capacity(spec.clone(), 4);
+    assert!(b.push(
+        &row([1.5, -2.0], 10, [(-3, 0.25), (4, 8.0)], b"ab\0x", 2, 0xFF),
+        10
+    ));
+    assert!(b.push(
+        &row([f32::NAN, 0.0], 20, [(5, -1.0), (6, 2.0)], b"abcd", 0, b'A'),
+        20
+    ));
+    assert!(!b.push(&[0; 10], 30), "too short: nothing added");
+    let cols = b.take();
+    assert_eq!(cols.rows(), 2);
+    assert_eq!(cols.get("timestamp").unwrap().as_u64(), Some(&[10, 20][..]));
+    let q0 = cols.get("q[0]").unwrap().as_f32().unwrap();
+    assert_eq!((q0[0], q0[1].is_nan()), (1.5, true));
+    assert_eq!(cols.get("e[1].a").unwrap().as_i16(), Some(&[4, 6][..]));
+    assert_eq!(
+        cols.get("e[0].b").unwrap().as_f64(),
+        Some(&[0.25, -1.0][..])
+    );
+    assert_eq!(
+        cols.get("name").unwrap().as_text().unwrap(),
+        ["ab".to_owned(), "abcd".to_owned()]
+    );
+    assert_eq!(cols.get("ok").unwrap().as_bool(), Some(&[true, false][..]));
+    assert_eq!(cols.get("c").unwrap().as_char(), Some(&[0xFF, b'A'][..]));
+    assert_eq!(cols.get("c").unwrap().to_f64().unwrap(), [-1.0, 65.0]);
+    // The next batch starts empty.
+    assert!(b.push(
+        &row([3.0, 4.0], 30, [(0, 0.0), (0, 0.0)], b"\0\0\0\0", 1, 0),
+        30
+    ));
+    let next = b.take();
+    assert_eq!(next.rows(), 1);
+    assert_eq!(
+        next.get("name").unwrap().as_text().unwrap(),
+        [String::new()]
+    );
+}
+
+#[test]
+fn a_log_gives_the_columns_of_an_instance_with_unwrapped_timestamps() {
+    // Version 0 with a uint16_t timestamp that wraps: the column holds the unwrapped µs.
+    let mut f = FileHeader {
+        version: 0,
+        start_timestamp: 0,
+    }
+    .to_bytes()
+    .to_vec();
+    Message::Format(b"t:uint16_t timestamp;float x;")
+        .encode(&mut f)
+        .unwrap();
+    Message::Subscribe {
+        multi_id: 0,
+        msg_id: 0,
+        name: b"t",
+    }
+    .encode(&mut f)
+    .unwrap();
+    for (ts, x) in [(65_000u16, 1.0f32), (100, 2.0)] {
+        let mut data = ts.to_le_bytes().to_vec();
+        data.extend_from_slice(&x.to_le_bytes());
+        Message::Data {
+            msg_id: 0,
+            data: &data,
+        }
+        .encode(&mut f)
+        .unwrap();
+    }
+    let log = Log::from_vec(f).unwrap();
+    let cols = log.columns("t", 0).unwrap();
+    assert_eq!(cols.defs()[0].ulog_type, "uint16_t");
+    assert_eq!(
+        cols.get("timestamp").unwrap().as_u64(),
+        Some(&[65_000, 65_636][..])
+    );
+    assert_eq!(cols.get("x").unwrap().as_f32(), Some(&[1.0, 2.0][..]));
+    assert!(log.columns("t", 1).is_none());
+    assert!(log.columns("nope", 0).is_none());
+}

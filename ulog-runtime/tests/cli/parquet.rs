@@ -1,0 +1,392 @@
+//! `ulog parquet` against pyulog and independent Parquet readers: every corpus log's files
+//! read back by pyarrow equal pyulog's columns, a hive-layout fleet answers DuckDB queries
+//! as pyulog does, and the options, failures and damaged logs behave as documented.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use super::corpus::{corpus_files, pyulog_blind_ranges, short_name, under_ci};
+use super::{stdout, temp_dir, ulog};
+
+/// Whether python3 can import these modules (required under CI, where `.ci/run` installs
+/// them).
+fn python_has(modules: &str) -> bool {
+    let ok = Command::new("python3")
+        .args(["-c", &format!("import {modules}")])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    assert!(
+        ok || !under_ci(),
+        "under CI python3 must have {modules} (.ci/run installs them)"
+    );
+    if !ok {
+        eprintln!("python3 lacks {modules}: nothing to compare with");
+    }
+    ok
+}
+
+/// Runs a script of `tests/py`; its JSON summary, or its error text.
+fn script(name: &str, args: &[&Path]) -> Result<serde_json::Value, String> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../tests/py")
+        .join(name);
+    let out = Command::new("python3")
+        .arg(path)
+        .args(args)
+        .output()
+        .expect("python3 runs");
+    if !out.status.success() {
+        return Err(String::from_utf8_lossy(&out.stderr).into_owned());
+    }
+    serde_json::from_slice(&out.stdout).map_err(|e| format!("summary: {e}"))
+}
+
+/// Per topic instance, the indices (in file order) of our rows pyulog cannot see.
+fn hidden_rows(path: &Path) -> BTreeMap<String, Vec<usize>> {
+    let log = ulog_runtime::Log::open(path).unwrap();
+    let blind = pyulog_blind_ranges(&log);
+    let mut out = BTreeMap::new();
+    if blind.is_empty() {
+        return out;
+    }
+    for t in log.topics() {
+        let mut offsets: Vec<u64> = log
+            .subscriptions()
+            .iter()
+            .filter(|s| s.name == t.name && s.multi_id == t.multi_id)
+            .flat_map(|s| log.rows(s).map(|r| r.offset))
+            .collect();
+        offsets.sort_unstable();
+        let hidden: Vec<usize> = offsets
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| blind.iter().any(|b| b.contains(o)))
+            .map(|(i, _)| i)
+            .collect();
+        if !hidden.is_empty() {
+            out.insert(format!("{}/{}", t.name, t.multi_id), hidden);
+        }
+    }
+    out
+}
+
+#[test]
+fn parquet_equals_pyulog_on_every_corpus_file() {
+    if !python_has("pyarrow, pyulog, numpy") {
+        return;
+    }
+    let out = temp_dir("parquet");
+    let (mut logs, mut files, mut rows, mut cells) = (0, 0, 0, 0);
+    let mut failures = Vec::new();
+    for path in corpus_files() {
+        let name = short_name(&path);
+        let dir = out.join(logs.to_string());
+        let run = ulog(&[
+            "parquet",
+            path.to_str().unwrap(),
+            "-o",
+            dir.to_str().unwrap(),
+        ]);
+        if !run.status.success() {
+            failures.push(format!(
+                "{name}: ulog parquet failed: {}",
+                String::from_utf8_lossy(&run.stderr)
+            ));
+            continue;
+        }
+        let hidden = dir.join("hidden.json");
+        std::fs::write(&hidden, serde_json::to_vec(&hidden_rows(&path)).unwrap()).unwrap();
+        let folder = dir.join(ulog_runtime::file_names::log_stem(&path));
+        match script("parquet_check.py", &[&path, &folder, &hidden]) {
+            Ok(summary) => {
+                files += summary["files"].as_u64().unwrap();
+                rows += summary["rows"].as_u64().unwrap();
+                cells += summary["cells"].as_u64().unwrap();
+            }
+            Err(e) => failures.push(format!("{name}: {e}")),
+        }
+        logs += 1;
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    eprintln!(
+        "{logs} logs, {files} Parquet files, {rows} rows, {cells} cells equal to pyulog's \
+         (read by pyarrow); key-value metadata and metadata.json checked"
+    );
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+/// Corpus logs with distinct stems, PX4 ones with vehicle_attitude (the fleet query's topic).
+fn fleet() -> Vec<PathBuf> {
+    let mut seen = std::collections::HashSet::new();
+    corpus_files()
+        .into_iter()
+        .filter(|p| {
+            let Ok(log) = ulog_runtime::Log::open(p) else {
+                return false;
+            };
+            log.diagnostics().iter().all(|d| !d.is_corruption())
+                && log.topics().iter().any(|t| t.name == "vehicle_attitude")
+                && seen.insert(ulog_runtime::file_names::log_stem(p).to_lowercase())
+        })
+        .collect()
+}
+
+#[test]
+fn a_fleet_in_hive_layout_is_one_duckdb_table_per_topic() {
+    if !python_has("duckdb, pyulog, numpy") {
+        return;
+    }
+    let logs = fleet();
+    assert!(logs.len() >= 2 || !under_ci(), "the corpus has PX4 logs");
+    if logs.len() < 2 {
+        return;
+    }
+    let dir = temp_dir("fleet");
+    let mut args = vec!["parquet", "--layout", "hive", "-o", dir.to_str().unwrap()];
+    args.extend(logs.iter().map(|p| p.to_str().unwrap()));
+    stdout(&args);
+    // The layout: a folder per topic, log and instance, and a metadata.json per log.
+    let stem = ulog_runtime::file_names::log_stem(&logs[0]);
+    assert!(
+        dir.join("topic=vehicle_attitude")
+            .join(format!("log={stem}"))
+            .join("multi_id=0/data.parquet")
+            .is_file()
+    );
+    assert!(
+        dir.join("metadata")
+            .join(format!("log={stem}"))
+            .join("metadata.json")
+            .is_file()
+    );
+    let mut script_args: Vec<&Path> = vec![&dir];
+    script_args.extend(logs.iter().map(PathBuf::as_path));
+    let summary = script("fleet_check.py", &script_args).unwrap_or_else(|e| panic!("{e}"));
+    eprintln!("fleet of {} logs, duckdb vs pyulog: {summary}", logs.len());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A log made by the writer: two topics, one with two instances, over 10 s.
+fn small_log(dir: &Path) -> PathBuf {
+    use ulog_runtime::{ULog, Writer, WriterOptions};
+    #[derive(ULog)]
+    struct Battery {
+        timestamp: u64,
+        voltage_v: f32,
+    }
+    #[derive(ULog)]
+    struct Gps {
+        timestamp: u64,
+        alt: f64,
+    }
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    let battery = w.topic::<Battery>(0).unwrap();
+    let battery1 = w.topic::<Battery>(1).unwrap();
+    let gps = w.topic::<Gps>(0).unwrap();
+    for s in 0..10u64 {
+        let t = s * 1_000_000;
+        w.write(
+            &battery,
+            &Battery {
+                timestamp: t,
+                voltage_v: s as f32,
+            },
+        )
+        .unwrap();
+        w.write(
+            &battery1,
+            &Battery {
+                timestamp: t,
+                voltage_v: -(s as f32),
+            },
+        )
+        .unwrap();
+        w.write(
+            &gps,
+            &Gps {
+                timestamp: t + 1,
+                alt: 100.0 + s as f64,
+            },
+        )
+        .unwrap();
+    }
+    let path = dir.join("small.ulg");
+    std::fs::write(&path, w.into_inner()).unwrap();
+    path
+}
+
+#[test]
+fn parquet_options_select_topics_and_time_and_say_what_they_wrote() {
+    let dir = temp_dir("parquet-options");
+    let log = small_log(&dir);
+    let out = dir.join("out");
+    let text = stdout(&[
+        "parquet",
+        log.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "-m",
+        "battery",
+        "--start",
+        "2",
+        "--end",
+        "5",
+    ]);
+    let folder = out.join("small");
+    assert_eq!(
+        text,
+        format!(
+            "{}: 2 files, 6 rows, {}\n",
+            log.display(),
+            folder.join("metadata.json").display()
+        )
+    );
+    let mut names: Vec<String> = std::fs::read_dir(&folder)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        ["battery_0.parquet", "battery_1.parquet", "metadata.json"]
+    );
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(folder.join("metadata.json")).unwrap()).unwrap();
+    // The files list what was written; the topics describe the whole log.
+    let files: Vec<(String, u64)> = meta["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| {
+            (
+                f["path"].as_str().unwrap().to_owned(),
+                f["rows"].as_u64().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        files,
+        [
+            ("small/battery_0.parquet".to_owned(), 3),
+            ("small/battery_1.parquet".to_owned(), 3)
+        ]
+    );
+    let topics: Vec<(&str, u64, u64)> = meta["topics"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| {
+            (
+                t["topic"].as_str().unwrap(),
+                t["multi_id"].as_u64().unwrap(),
+                t["rows"].as_u64().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        topics,
+        [("battery", 0, 10), ("battery", 1, 10), ("gps", 0, 10)]
+    );
+    // A topic no log has is said.
+    let run = ulog(&[
+        "parquet",
+        log.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "-m",
+        "batery",
+    ]);
+    assert!(run.status.success());
+    assert!(
+        String::from_utf8_lossy(&run.stderr).contains("no log has rows of topic `batery`"),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_log_that_cannot_be_read_is_reported_and_the_others_converted() {
+    let dir = temp_dir("parquet-failures");
+    let good = small_log(&dir);
+    let bad = dir.join("notes.ulg");
+    std::fs::write(&bad, b"these are not the bytes of a log").unwrap();
+    let missing = dir.join("missing.ulg");
+    let out = dir.join("out");
+    let run = ulog(&[
+        "parquet",
+        bad.to_str().unwrap(),
+        good.to_str().unwrap(),
+        missing.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(run.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        err.contains(&format!("ulog: {}: not a ULog file", bad.display())),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!("ulog: {}: I/O error", missing.display())),
+        "{err}"
+    );
+    assert!(err.contains("ulog: 2 of 3 logs not converted"), "{err}");
+    let text = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        text.starts_with(&format!("{}: 3 files, 30 rows", good.display())),
+        "{text}"
+    );
+    assert!(out.join("small/gps_0.parquet").is_file());
+    assert!(
+        !out.join("notes").exists(),
+        "nothing written for a log that cannot be read"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_damaged_log_converts_what_is_intact_and_says_what_was_skipped() {
+    let dir = temp_dir("parquet-damaged");
+    let log = small_log(&dir);
+    let mut bytes = std::fs::read(&log).unwrap();
+    // Garbage in the middle of the data: the reader skips it and goes on.
+    let at = bytes.len() / 2;
+    bytes.splice(at..at, [0xAB; 40]);
+    let damaged = dir.join("damaged.ulg");
+    std::fs::write(&damaged, &bytes).unwrap();
+    let out = dir.join("out");
+    let run = ulog(&[
+        "parquet",
+        damaged.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(err.contains("damaged bytes skipped"), "{err}");
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("damaged/metadata.json")).unwrap()).unwrap();
+    assert!(
+        meta["skipped"]["damaged_bytes"].as_u64().unwrap() >= 40,
+        "{meta}"
+    );
+    assert!(!meta["diagnostics"].as_array().unwrap().is_empty());
+    // What the whole-file reader recovers is what was written.
+    let whole = ulog_runtime::Log::open(&damaged).unwrap();
+    let written: u64 = meta["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["rows"].as_u64().unwrap())
+        .sum();
+    assert_eq!(written, whole.row_count() as u64);
+    assert!(written < 30, "some rows were lost in the damage");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
