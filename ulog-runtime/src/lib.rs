@@ -9,6 +9,8 @@
 //!   own definitions once, then decoded by offset reads ([`Log::topic`]) and written
 //!   ([`Writer::topic`]).
 //! - [`write`](mod@write): a [`Writer`] of version-1 files.
+//! - [`events`] (feature `events`): PX4 events decoded with the metadata the log embeds,
+//!   and the messages of a log as pyulog's `ulog_messages` lists them.
 //! - [`columns`]: a topic instance as typed columns (and, with features, Arrow record
 //!   batches and Parquet files).
 //! - [`file_names`]: safe, unique file names for exports that write a file per topic.
@@ -35,6 +37,8 @@ pub mod columns;
 #[cfg(feature = "serde")]
 pub mod document;
 mod error;
+#[cfg(feature = "events")]
+pub mod events;
 pub mod file_names;
 pub mod pytext;
 pub mod read;

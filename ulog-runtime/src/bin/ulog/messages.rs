@@ -1,37 +1,127 @@
-//! `ulog messages`: logged and tagged strings as pyulog's `ulog_messages` prints them.
+//! `ulog messages`: logged strings and PX4 events as pyulog's `ulog_messages` prints them,
+//! over `events::messages`.
 
 use std::io::Write;
 use std::path::PathBuf;
 
-use ulog_runtime::Log;
+use serde::Serialize;
+use ulog_runtime::events::{MessageKind, MessageLine, messages};
 
 use crate::Failure;
-use crate::info::hms;
 
-/// `ulog messages FILE`.
+/// `ulog messages FILE [-i] [--json]`.
 #[derive(clap::Args)]
 pub(crate) struct Args {
     /// The log.
     file: PathBuf,
+    /// Drop bytes of logged strings that are not UTF-8 (pyulog's `-i`); without it such a
+    /// string is an error.
+    #[arg(short, long)]
+    ignore: bool,
+    /// JSON Lines, one object per message with every field (pyulog's warnings go to stderr).
+    #[arg(long)]
+    json: bool,
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
-    messages(&crate::open(&args.file)?, out)
-}
-
-/// As pyulog's `ulog_messages`: `h:mm:ss.mmm LEVEL: text`; tagged strings add `[tag N]`.
-fn messages(log: &Log<'_>, out: &mut impl Write) -> Result<(), Failure> {
-    for m in log.logged_messages() {
-        let ms = m.timestamp / 1000;
-        let level = m.level().map_or("UNKNOWN", |l| l.name());
-        let tag = m.tag.map(|t| format!("[tag {t}] ")).unwrap_or_default();
-        writeln!(
-            out,
-            "{}.{:03} {level}: {tag}{}",
-            hms(ms * 1000),
-            ms % 1000,
-            m.text
-        )?;
+    let log = crate::open(&args.file)?;
+    let m = messages(&log);
+    if !args.ignore
+        && let Some(at) = m.invalid_utf8.first()
+    {
+        return Err(Failure::at(
+            &args.file,
+            format!(
+                "the logged string at byte {at} is not valid UTF-8 (-i leaves out the invalid bytes, as pyulog's -i does)"
+            ),
+        ));
+    }
+    for note in &m.notes {
+        eprintln!("ulog: {}: {note}", args.file.display());
+    }
+    if args.json {
+        for w in &m.warnings {
+            eprintln!("ulog: {}: {w}", args.file.display());
+        }
+        for line in &m.lines {
+            serde_json::to_writer(&mut *out, &JsonLine::of(line))?;
+            out.write_all(b"\n")?;
+        }
+        return Ok(());
+    }
+    for w in &m.warnings {
+        writeln!(out, "{w}")?;
+    }
+    for line in &m.lines {
+        writeln!(out, "{}", line.pyulog_line())?;
     }
     Ok(())
+}
+
+/// One message of `--json`.
+#[derive(Serialize)]
+struct JsonLine<'a> {
+    timestamp: u64,
+    level: &'static str,
+    text: &'a str,
+    kind: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    tag: Option<u16>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    event: Option<JsonEvent<'a>>,
+}
+
+#[derive(Serialize)]
+struct JsonEvent<'a> {
+    id: u32,
+    name: Option<&'a str>,
+    external_level: u8,
+    sequence: Option<u16>,
+    arguments: Vec<JsonArg<'a>>,
+    description: Option<&'a str>,
+}
+
+#[derive(Serialize)]
+struct JsonArg<'a> {
+    name: &'a str,
+    value: &'a str,
+}
+
+impl<'a> JsonLine<'a> {
+    fn of(line: &'a MessageLine) -> JsonLine<'a> {
+        let (kind, tag, event) = match &line.kind {
+            MessageKind::Logged => ("logged", None, None),
+            MessageKind::Tagged(t) => ("tagged", Some(*t), None),
+            MessageKind::Event {
+                id,
+                name,
+                external_level,
+                sequence,
+                arguments,
+                description,
+            } => (
+                "event",
+                None,
+                Some(JsonEvent {
+                    id: *id,
+                    name: name.as_deref(),
+                    external_level: *external_level,
+                    sequence: *sequence,
+                    arguments: arguments
+                        .iter()
+                        .map(|(name, value)| JsonArg { name, value })
+                        .collect(),
+                    description: description.as_deref(),
+                }),
+            ),
+        };
+        JsonLine {
+            timestamp: line.timestamp,
+            level: line.level,
+            text: &line.text,
+            kind,
+            tag,
+            event,
+        }
+    }
 }
