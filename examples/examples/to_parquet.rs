@@ -6,6 +6,7 @@
 //! ```
 
 use ulog_runtime::Log;
+use ulog_runtime::columns::arrow::arrow_array::RecordBatchReader;
 use ulog_runtime::columns::arrow::record_batches;
 use ulog_runtime::columns::parquet::{Converter, ParquetOptions};
 

@@ -114,7 +114,10 @@ def check(log, folder, hidden):
         fail(f'{label}: a .partial file was left behind')
     theirs = {}
     for d in ulog.data_list:
-        theirs[f'{component(d.name)}_{d.multi_id}.parquet'] = d
+        name = f'{component(d.name)}_{d.multi_id}.parquet'
+        if name in theirs:
+            fail(f'{label}: pyulog has two datasets of {d.name} #{d.multi_id}')
+        theirs[name] = d
     missing = set(theirs) - ours
     if missing:
         fail(f'{label}: no Parquet file for {sorted(missing)}')

@@ -24,7 +24,7 @@ pub struct LogFacts {
     /// The firmware version as pyulog gives it (`v1.15.1`), if a release.
     pub software_version: Option<String>,
     /// The flag bits, for files that have them.
-    pub flag_bits: Option<Flags>,
+    pub flag_bits: Option<FlagBitsFact>,
     /// Info values, in file order.
     pub info: Ordered<Value>,
     /// Multi info values: per key, each value as its parts.
@@ -32,15 +32,15 @@ pub struct LogFacts {
     /// Parameters as logging started.
     pub parameters: Ordered<ParamValue>,
     /// Parameter changes, in file order.
-    pub parameter_changes: Vec<Change>,
+    pub parameter_changes: Vec<ParameterChangeFact>,
     /// Default parameters, in file order.
-    pub default_parameters: Vec<Default>,
+    pub default_parameters: Vec<DefaultParameterFact>,
     /// Logged strings (`L`, and `C` with their tag), in file order.
-    pub logged_messages: Vec<Logged>,
+    pub logged_messages: Vec<LoggedFact>,
     /// Dropouts, in file order.
     pub dropouts: Vec<DropoutFact>,
     /// Per topic instance with rows: rows and time range.
-    pub topics: Vec<Topic>,
+    pub topics: Vec<TopicFact>,
     /// What reading left out.
     pub skipped: SkippedFacts,
     /// The diagnostics, as text, in file order (a stream keeps the first
@@ -71,7 +71,7 @@ impl<V: Serialize> Serialize for Ordered<V> {
 
 /// The flag bits.
 #[derive(Debug, Clone, Serialize)]
-pub struct Flags {
+pub struct FlagBitsFact {
     /// Compatible flags.
     pub compat: [u8; 8],
     /// Incompatible flags.
@@ -82,7 +82,7 @@ pub struct Flags {
 
 /// A parameter change.
 #[derive(Debug, Clone, Serialize)]
-pub struct Change {
+pub struct ParameterChangeFact {
     /// The latest data timestamp before it (as pyulog dates it), µs.
     pub timestamp: u64,
     /// The parameter.
@@ -93,7 +93,7 @@ pub struct Change {
 
 /// A default parameter.
 #[derive(Debug, Clone, Serialize)]
-pub struct Default {
+pub struct DefaultParameterFact {
     /// The parameter.
     pub name: String,
     /// Its default.
@@ -104,7 +104,7 @@ pub struct Default {
 
 /// A logged string.
 #[derive(Debug, Clone, Serialize)]
-pub struct Logged {
+pub struct LoggedFact {
     /// µs.
     pub timestamp: u64,
     /// `ERROR`, `INFO`...; `None` for a byte that is no level.
@@ -126,7 +126,7 @@ pub struct DropoutFact {
 
 /// A topic instance with rows.
 #[derive(Debug, Clone, Serialize)]
-pub struct Topic {
+pub struct TopicFact {
     /// The topic.
     pub topic: String,
     /// The instance.
@@ -232,7 +232,7 @@ impl LogFacts {
             start_timestamp: header.start_timestamp,
             start_utc: header.start_utc().map(|t| t.to_string()),
             software_version: meta.software_version(),
-            flag_bits: meta.flag_bits().map(|b: &FlagBits| Flags {
+            flag_bits: meta.flag_bits().map(|b: &FlagBits| FlagBitsFact {
                 compat: b.compat,
                 incompat: b.incompat,
                 appended_offsets: b.appended().collect(),
@@ -258,7 +258,7 @@ impl LogFacts {
             parameter_changes: c
                 .changes
                 .iter()
-                .map(|p| Change {
+                .map(|p| ParameterChangeFact {
                     timestamp: p.timestamp,
                     name: p.name.clone(),
                     value: p.value,
@@ -267,7 +267,7 @@ impl LogFacts {
             default_parameters: meta
                 .default_parameters()
                 .iter()
-                .map(|d: &DefaultParameter| Default {
+                .map(|d: &DefaultParameter| DefaultParameterFact {
                     name: d.name.clone(),
                     value: d.value,
                     default_types: d.default_types,
@@ -276,7 +276,7 @@ impl LogFacts {
             logged_messages: c
                 .logged
                 .iter()
-                .map(|m| Logged {
+                .map(|m| LoggedFact {
                     timestamp: m.timestamp,
                     level: m.level().map(|l| l.name()),
                     tag: m.tag,
@@ -294,7 +294,7 @@ impl LogFacts {
             topics: c
                 .topics
                 .iter()
-                .map(|t| Topic {
+                .map(|t| TopicFact {
                     topic: t.name.clone(),
                     multi_id: t.multi_id,
                     format: format_of(t),

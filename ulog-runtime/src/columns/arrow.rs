@@ -2,8 +2,8 @@
 //! exact types: `uint64_t` -> `UInt64`, `float` -> `Float32`, `double` -> `Float64`, `bool` ->
 //! `Boolean`, `char[N]` -> `Utf8`, a single `char` -> `Int8` (its byte, as pyulog shows it),
 //! and each integer type to the Arrow integer of the same size and sign. Every field's
-//! metadata carries its ULog type (`ulog.type`) and the topic's format string
-//! (`ulog.format`); the schema's metadata the topic (`ulog.topic`) and the format.
+//! metadata carries its ULog type (`ulog.type`); the schema's metadata the topic
+//! (`ulog.topic`) and its format string (`ulog.format`).
 //!
 //! ```
 //! use ulog_runtime::{Log, ULog, Writer, WriterOptions};
@@ -29,6 +29,9 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
+/// The arrow-rs crates these batches are made of (60.x), for matching versions.
+pub use {arrow_array, arrow_schema};
+
 use arrow_array::builder::BooleanBufferBuilder;
 use arrow_array::{
     ArrayRef, BooleanArray, Float32Array, Float64Array, Int8Array, Int16Array, Int32Array,
@@ -37,7 +40,7 @@ use arrow_array::{
 use arrow_schema::{ArrowError, DataType, Field, Schema, SchemaRef};
 
 use super::{ColumnBuilder, ColumnKind, ColumnSpec, ColumnValues, Columns};
-use crate::read::{Log, Rows, Subscription};
+use crate::read::{InstanceRows, Log};
 use crate::schema::Primitive;
 
 /// The Arrow type of a column.
@@ -66,10 +69,10 @@ pub fn schema(spec: &ColumnSpec, topic: &str) -> SchemaRef {
         .columns()
         .iter()
         .map(|c| {
-            Field::new(&c.name, data_type(c.kind), false).with_metadata(HashMap::from([
-                ("ulog.type".to_owned(), c.ulog_type.clone()),
-                ("ulog.format".to_owned(), spec.format().to_owned()),
-            ]))
+            Field::new(&c.name, data_type(c.kind), false).with_metadata(HashMap::from([(
+                "ulog.type".to_owned(),
+                c.ulog_type.clone(),
+            )]))
         })
         .collect();
     Arc::new(Schema::new_with_metadata(
@@ -113,13 +116,11 @@ fn array(values: ColumnValues) -> ArrayRef {
 }
 
 /// The record batches of one topic instance of a log, each of at most `rows` rows
-/// ([`record_batches`]).
+/// ([`record_batches`]); an Arrow [`RecordBatchReader`](arrow_array::RecordBatchReader).
 pub struct RecordBatches<'a> {
     builder: ColumnBuilder,
     schema: SchemaRef,
-    subs: std::vec::IntoIter<&'a Subscription>,
-    current: Option<Rows<'a>>,
-    log: &'a Log<'a>,
+    source: InstanceRows<'a>,
     rows: usize,
 }
 
@@ -132,34 +133,27 @@ impl std::fmt::Debug for RecordBatches<'_> {
 }
 
 /// The rows of one topic instance of `log` (every subscription of that name and `multi_id`,
-/// in file order) as Arrow record batches of at most `rows` rows each; `None` if the log has
-/// no such instance or cannot decode it.
+/// rows in file order) as Arrow record batches of at most `rows` rows each; `None` if the
+/// log has no such instance or cannot decode it.
 pub fn record_batches<'a>(
     log: &'a Log<'a>,
     topic: &str,
     multi_id: u8,
     rows: usize,
 ) -> Option<RecordBatches<'a>> {
-    let subs: Vec<&Subscription> = log
-        .subscriptions()
-        .iter()
-        .filter(|s| s.name == topic && s.multi_id == multi_id && s.format().is_some())
-        .collect();
+    let subs = log.instance(topic, multi_id);
     let spec = ColumnSpec::of(log.metadata().schema(), subs.first()?.format()?)?;
     let schema = schema(&spec, topic);
     Some(RecordBatches {
         builder: ColumnBuilder::with_capacity(spec, rows.clamp(1, 1 << 16)),
         schema,
-        subs: subs.into_iter(),
-        current: None,
-        log,
+        source: log.instance_rows(&subs),
         rows: rows.max(1),
     })
 }
 
-impl RecordBatches<'_> {
-    /// The batches' schema.
-    pub fn schema(&self) -> SchemaRef {
+impl arrow_array::RecordBatchReader for RecordBatches<'_> {
+    fn schema(&self) -> SchemaRef {
         self.schema.clone()
     }
 }
@@ -170,16 +164,7 @@ impl Iterator for RecordBatches<'_> {
     fn next(&mut self) -> Option<Self::Item> {
         let builder = &mut self.builder;
         while builder.rows() < self.rows {
-            let row = match self.current.as_mut().and_then(Iterator::next) {
-                Some(row) => row,
-                None => match self.subs.next() {
-                    Some(sub) => {
-                        self.current = Some(self.log.rows(sub));
-                        continue;
-                    }
-                    None => break,
-                },
-            };
+            let Some(row) = self.source.next() else { break };
             builder.push(row.data, row.timestamp);
         }
         (builder.rows() > 0).then(|| record_batch(&self.schema, builder.take()))
@@ -217,7 +202,7 @@ mod tests {
         );
         assert_eq!(s.metadata()["ulog.topic"], "t");
         assert_eq!(s.field(13).metadata()["ulog.type"], "char[3]");
-        assert!(s.field(0).metadata()["ulog.format"].starts_with("t:uint64_t timestamp;"));
+        assert!(s.metadata()["ulog.format"].starts_with("t:uint64_t timestamp;"));
         let mut b = ColumnBuilder::new(spec);
         let mut row = 7u64.to_le_bytes().to_vec();
         row.extend_from_slice(&[0xFE, 2, 3, 0, 4, 0, 5, 0, 0, 0, 6, 0, 0, 0]);

@@ -28,6 +28,7 @@ use super::{Admit, ColumnKind, ColumnSpec, Window, text};
 use crate::Scalar;
 use crate::pytext::{f32_text, f64_text};
 use crate::read::{Log, Subscription};
+
 use crate::schema::Primitive;
 
 /// How CSV files are written.
@@ -45,29 +46,6 @@ impl Default for CsvOptions {
             delimiter: ",".to_owned(),
             window: Window::default(),
         }
-    }
-}
-
-impl Log<'_> {
-    /// The topic instances with rows, each as its subscriptions (one unless resubscribed)
-    /// in file order, instances in the order they were first subscribed; only `topics` if
-    /// not empty. Subscriptions whose format cannot be read are left out.
-    pub fn instances(&self, topics: &[String]) -> Vec<Vec<&Subscription>> {
-        let mut groups: Vec<Vec<&Subscription>> = Vec::new();
-        for sub in self.subscriptions() {
-            if sub.format().is_none() || (!topics.is_empty() && !topics.contains(&sub.name)) {
-                continue;
-            }
-            match groups
-                .iter_mut()
-                .find(|g| g[0].name == sub.name && g[0].multi_id == sub.multi_id)
-            {
-                Some(g) => g.push(sub),
-                None => groups.push(vec![sub]),
-            }
-        }
-        groups.retain(|g| g.iter().any(|s| self.rows(s).len() > 0));
-        groups
     }
 }
 
@@ -101,7 +79,7 @@ fn write_csv_with(
     let mut line = String::new();
     let mut count = 0;
     let mut started = false;
-    for row in instance.iter().flat_map(|s| log.rows(s)) {
+    for row in log.instance_rows(instance) {
         progress();
         match options.window.admit(row.timestamp, started) {
             Admit::Skip => continue,

@@ -228,6 +228,14 @@ impl ColumnSpec {
         &self.format
     }
 
+    /// Bytes a row takes once in columns: the timestamp's 8, each value's size, a text's
+    /// length and its `String` (24).
+    pub fn stored_row_size(&self) -> usize {
+        let values: usize = self.runs.iter().map(|r| r.1 * r.2.size()).sum();
+        let texts: usize = self.texts.iter().map(|t| t.1 + 24).sum();
+        8 + values + texts
+    }
+
     /// Bytes of a row the columns read: rows shorter than this are not taken.
     pub fn row_len(&self) -> usize {
         let runs = self.runs.iter().map(|r| r.0 + r.1 * r.2.size());
@@ -660,23 +668,25 @@ pub fn text(bytes: &[u8]) -> String {
 
 impl Log<'_> {
     /// The columns of one topic instance (every subscription of that name and `multi_id`,
-    /// in file order); `None` if the log has no such instance or its format cannot be read.
+    /// rows in file order); `None` if the log has no such instance or its format cannot be
+    /// read.
     pub fn columns(&self, topic: &str, multi_id: u8) -> Option<Columns> {
-        let subs: Vec<&Subscription> = self
-            .subscriptions()
-            .iter()
-            .filter(|s| s.name == topic && s.multi_id == multi_id && s.format().is_some())
-            .collect();
-        let id = subs.first()?.format()?;
-        let spec = ColumnSpec::from_checked(self.metadata().schema(), id, false);
+        let subs = self.instance(topic, multi_id);
+        let spec = ColumnSpec::of(self.metadata().schema(), subs.first()?.format()?)?;
         let rows = subs.iter().map(|s| self.rows(s).len()).sum();
         let mut builder = ColumnBuilder::with_capacity(spec, rows);
-        for sub in subs {
-            for row in self.rows(sub) {
-                builder.push(row.data, row.timestamp);
-            }
+        for row in self.instance_rows(&subs) {
+            builder.push(row.data, row.timestamp);
         }
         Some(builder.take())
+    }
+
+    /// The subscriptions of one topic instance whose format can be read, in file order.
+    pub(crate) fn instance(&self, topic: &str, multi_id: u8) -> Vec<&Subscription> {
+        self.subscriptions()
+            .iter()
+            .filter(|s| s.name == topic && s.multi_id == multi_id && s.format().is_some())
+            .collect()
     }
 }
 

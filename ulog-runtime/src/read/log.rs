@@ -578,7 +578,7 @@ impl<'a> Log<'a> {
 
     /// The row whose message is at file offset `at`.
     #[inline(always)]
-    fn row_at(&self, at: u64) -> Row<'_> {
+    pub(crate) fn row_at(&self, at: u64) -> Row<'_> {
         let bytes = self.bytes.as_slice();
         let at = at as usize;
         let size = usize::from(u16::from_le_bytes([bytes[at], bytes[at + 1]]));

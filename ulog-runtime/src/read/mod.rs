@@ -24,7 +24,7 @@ pub use metadata::{
     Parameter, ParameterChange, Subscription, VersionInfo,
 };
 pub use stream::{Event, StreamReader};
-pub use topics::{Skipped, TopicSummary};
+pub use topics::{InstanceRows, Skipped, TopicSummary};
 
 use crate::error::{Diagnostic, DiagnosticKind, ReadError};
 use crate::schema::{Primitive, Schema};

@@ -1,7 +1,7 @@
 //! What pyulog users look for first in a whole-file [`Log`]: the topics with their row
 //! counts and time ranges, and the parameter changes grouped by name.
 
-use super::{Log, ParameterChange};
+use super::{Log, ParameterChange, Subscription};
 
 /// One topic instance of a log ([`Log::topics`]): every subscription of that name and
 /// `multi_id` together.
@@ -150,5 +150,72 @@ impl Log<'_> {
     /// reports it.
     pub fn skipped(&self) -> Skipped {
         Skipped::of(self.diagnostics())
+    }
+}
+
+impl<'a> Log<'a> {
+    /// The topic instances with rows, each as its subscriptions (one unless resubscribed)
+    /// in file order, instances in the order they were first subscribed; only `topics` if
+    /// not empty. Subscriptions whose format cannot be read are left out.
+    pub fn instances(&self, topics: &[String]) -> Vec<Vec<&Subscription>> {
+        let mut groups: Vec<Vec<&Subscription>> = Vec::new();
+        for sub in self.subscriptions() {
+            if sub.format().is_none() || (!topics.is_empty() && !topics.contains(&sub.name)) {
+                continue;
+            }
+            match groups
+                .iter_mut()
+                .find(|g| g[0].name == sub.name && g[0].multi_id == sub.multi_id)
+            {
+                Some(g) => g.push(sub),
+                None => groups.push(vec![sub]),
+            }
+        }
+        groups.retain(|g| g.iter().any(|s| self.rows(s).len() > 0));
+        groups
+    }
+
+    /// The rows of one topic instance's subscriptions (as [`Log::instances`] gives them),
+    /// in file order: a resubscribed instance's rows interleave as the file has them.
+    pub fn instance_rows<'s>(&'s self, subs: &[&'s Subscription]) -> InstanceRows<'s> {
+        match subs {
+            [one] => InstanceRows::One(self.rows(one)),
+            _ => {
+                let mut offsets: Vec<u64> = subs
+                    .iter()
+                    .flat_map(|s| self.rows(s).map(|r| r.offset))
+                    .collect();
+                offsets.sort_unstable();
+                InstanceRows::Merged(self, offsets.into_iter())
+            }
+        }
+    }
+}
+
+/// The rows of one topic instance, in file order ([`Log::instance_rows`]).
+#[derive(Debug)]
+pub enum InstanceRows<'a> {
+    /// One subscription's.
+    One(super::Rows<'a>),
+    /// Several subscriptions' merged by file offset.
+    Merged(&'a Log<'a>, std::vec::IntoIter<u64>),
+}
+
+impl<'a> Iterator for InstanceRows<'a> {
+    type Item = super::Row<'a>;
+
+    #[inline]
+    fn next(&mut self) -> Option<super::Row<'a>> {
+        match self {
+            InstanceRows::One(rows) => rows.next(),
+            InstanceRows::Merged(log, offsets) => offsets.next().map(|at| log.row_at(at)),
+        }
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        match self {
+            InstanceRows::One(rows) => rows.size_hint(),
+            InstanceRows::Merged(_, offsets) => offsets.size_hint(),
+        }
     }
 }

@@ -3,7 +3,6 @@
 //! pass the budget (the largest first), and the log's identity and `metadata.json` are
 //! written when the pass has hashed the whole file.
 
-use std::collections::HashMap;
 use std::fs::File;
 use std::io::{self, Read};
 use std::path::{Path, PathBuf};
@@ -13,7 +12,7 @@ use parquet::errors::ParquetError;
 use serde::Serialize;
 use sha2::Digest;
 
-use super::{AdmitRow, GpsClock, LogIdentity, ParquetOptions, Table, TableWritten};
+use super::{Admission, AdmitRow, GpsClock, LogIdentity, ParquetOptions, Table, TableWritten};
 use crate::columns::ColumnSpec;
 use crate::document::{Collected, KEPT_DIAGNOSTICS, LogFacts};
 use crate::file_names::FileNames;
@@ -71,6 +70,8 @@ pub struct Converter {
     pub(super) root: PathBuf,
     pub(super) options: ParquetOptions,
     pub(super) progress: Option<Arc<dyn Fn(u64) + Send + Sync>>,
+    /// Hive layout: each topic's folder, one for all logs this converter writes.
+    pub(super) topic_dirs: Arc<std::sync::Mutex<super::fleet::TopicDirs>>,
 }
 
 impl std::fmt::Debug for Converter {
@@ -127,6 +128,7 @@ impl Converter {
             root: root.into(),
             options,
             progress: None,
+            topic_dirs: Arc::default(),
         }
     }
 
@@ -206,7 +208,7 @@ impl Converter {
             .for_each_event(|event| pass.event(&event))
             .map_err(read_error)?;
         if let Some(e) = pass.failure.take() {
-            pass.discard();
+            // The guard removes what was written.
             return Err(e);
         }
         // The digest is of the whole file, whatever the reader stopped at.
@@ -256,14 +258,88 @@ impl<R> Hashing<'_, R> {
 const UNSEEN: u32 = 0;
 const LEFT_OUT: u32 = u32::MAX;
 
+/// A file that is open only while a row group or the footer is written to it (so a
+/// conversion of hundreds of tables holds no file handles between row groups); made empty
+/// on its first write.
+struct Reopening {
+    path: PathBuf,
+    file: Option<File>,
+    begun: bool,
+}
+
+impl Reopening {
+    fn new(path: PathBuf) -> Reopening {
+        Reopening {
+            path,
+            file: None,
+            begun: false,
+        }
+    }
+
+    /// Closes the handle (after the writer has flushed to it).
+    fn release(&mut self) {
+        self.file = None;
+    }
+
+    fn file(&mut self) -> io::Result<&mut File> {
+        if self.file.is_none() {
+            if !self.begun
+                && let Some(dir) = self.path.parent()
+            {
+                std::fs::create_dir_all(dir)?;
+            }
+            let file = if self.begun {
+                std::fs::OpenOptions::new().append(true).open(&self.path)?
+            } else {
+                File::create(&self.path)?
+            };
+            self.begun = true;
+            self.file = Some(file);
+        }
+        Ok(self.file.as_mut().expect("just opened"))
+    }
+}
+
+impl io::Write for Reopening {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        self.file()?.write(buf)
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        match &mut self.file {
+            Some(f) => f.flush(),
+            None => Ok(()),
+        }
+    }
+}
+
+/// The files a conversion has made; removed when it is dropped unless it succeeded (so a
+/// failed conversion leaves nothing, and no half-written file is ever under its name).
+#[derive(Default)]
+struct Outputs {
+    paths: Vec<PathBuf>,
+    kept: bool,
+}
+
+impl Drop for Outputs {
+    fn drop(&mut self) {
+        if !self.kept {
+            for p in &self.paths {
+                let _ = std::fs::remove_file(p);
+            }
+        }
+    }
+}
+
 /// One topic instance being written.
 struct Instance {
     topic: String,
     multi_id: u8,
     path: PathBuf,
     partial: PathBuf,
-    table: Table<File>,
-    /// Memory of its row group in progress, as last measured.
+    window: Admission,
+    table: Table<Reopening>,
+    /// Memory its table holds, as last measured.
     memory: usize,
 }
 
@@ -279,7 +355,6 @@ struct Pass<'c> {
     converter: &'c Converter,
     log_dir: String,
     names: FileNames,
-    topic_dirs: HashMap<String, String>,
     notes: Vec<String>,
     /// Per `msg_id`: (summary index + 1, instance index + 1), or [`UNSEEN`]/[`LEFT_OUT`].
     by_msg_id: Vec<(u32, u32)>,
@@ -295,6 +370,7 @@ struct Pass<'c> {
     skipped: Skipped,
     clock: GpsClock,
     failure: Option<ConvertError>,
+    outputs: Outputs,
 }
 
 impl<'c> Pass<'c> {
@@ -303,7 +379,6 @@ impl<'c> Pass<'c> {
             converter,
             log_dir: log_dir.to_owned(),
             names: FileNames::new(),
-            topic_dirs: HashMap::new(),
             notes: Vec::new(),
             by_msg_id: vec![(UNSEEN, UNSEEN); 1 << 16],
             summaries: Vec::new(),
@@ -317,6 +392,7 @@ impl<'c> Pass<'c> {
             skipped: Skipped::default(),
             clock: GpsClock::new(0),
             failure: None,
+            outputs: Outputs::default(),
         }
     }
 
@@ -331,6 +407,8 @@ impl<'c> Pass<'c> {
                     self.failure = Some(e);
                 }
             }
+            // A msg_id given to another subscription: its rows go where that one says.
+            Event::Subscription(sub) => self.by_msg_id[usize::from(sub.msg_id)] = (UNSEEN, UNSEEN),
             Event::Logged(m) => self.logged.push(m.clone()),
             Event::ParameterChange(c) => self.changes.push(c.clone()),
             Event::Dropout(d) => self.dropouts.push(*d),
@@ -342,7 +420,7 @@ impl<'c> Pass<'c> {
                     self.diagnostics_omitted += 1;
                 }
             }
-            Event::Definition { .. } | Event::Subscription(_) | Event::Sync { .. } => {}
+            Event::Definition { .. } | Event::Sync { .. } => {}
         }
     }
 
@@ -351,7 +429,7 @@ impl<'c> Pass<'c> {
         let msg_id = usize::from(row.subscription.msg_id);
         let (mut s, mut i) = self.by_msg_id[msg_id];
         if s == UNSEEN {
-            (s, i) = self.first_row(row)?;
+            (s, i) = self.first_row(row);
             self.by_msg_id[msg_id] = (s, i);
         }
         let summary = &mut self.summaries[s as usize - 1];
@@ -369,22 +447,26 @@ impl<'c> Pass<'c> {
         }
         let k = i as usize - 1;
         let inst = &mut self.instances[k];
-        match inst.table.admit(row.timestamp) {
+        match inst.window.admit(row.timestamp) {
             AdmitRow::Take => {}
             AdmitRow::Skip | AdmitRow::Stop => return Ok(()),
         }
-        let encoded = inst
+        let batched = inst
             .table
             .push(row.data, row.timestamp)
             .map_err(|e| parquet_error(inst, e))?;
-        if encoded {
+        if batched {
+            // A row group may have been written (the row cap): its file need not stay open.
+            if let Some(out) = inst.table.output() {
+                out.release();
+            }
             self.measure(k);
             self.within_budget()?;
         }
         Ok(())
     }
 
-    /// Re-reads the memory an instance's row group holds.
+    /// Re-reads the memory an instance's table holds.
     fn measure(&mut self, k: usize) {
         let inst = &mut self.instances[k];
         let now = inst.table.memory();
@@ -404,13 +486,16 @@ impl<'c> Pass<'c> {
                 return Ok(());
             }
             inst.table.flush().map_err(|e| parquet_error(inst, e))?;
+            if let Some(out) = inst.table.output() {
+                out.release();
+            }
             self.measure(k);
         }
         Ok(())
     }
 
-    /// Where the rows of a `msg_id` go, decided at its first row.
-    fn first_row(&mut self, row: &Row<'_>) -> Result<(u32, u32), ConvertError> {
+    /// Where the rows of a `msg_id` go, decided at its first row (after each subscription).
+    fn first_row(&mut self, row: &Row<'_>) -> (u32, u32) {
         let sub = row.subscription;
         let s = match self
             .summaries
@@ -418,7 +503,9 @@ impl<'c> Pass<'c> {
             .position(|x| x.topic.name == sub.name && x.topic.multi_id == sub.multi_id)
         {
             Some(s) => {
-                self.summaries[s].topic.msg_ids.push(sub.msg_id);
+                if !self.summaries[s].topic.msg_ids.contains(&sub.msg_id) {
+                    self.summaries[s].topic.msg_ids.push(sub.msg_id);
+                }
                 s
             }
             None => {
@@ -438,37 +525,31 @@ impl<'c> Pass<'c> {
         };
         let s = s as u32 + 1;
         if !self.converter.options.wants(&sub.name) {
-            return Ok((s, LEFT_OUT));
+            return (s, LEFT_OUT);
         }
         if let Some(k) = self
             .instances
             .iter()
             .position(|x| x.topic == sub.name && x.multi_id == sub.multi_id)
         {
-            return Ok((s, k as u32 + 1));
+            return (s, k as u32 + 1);
         }
         let Some(spec) = sub.format().and_then(|id| ColumnSpec::of(row.schema(), id)) else {
-            return Ok((s, LEFT_OUT));
+            return (s, LEFT_OUT);
         };
-        let instance = self.open(spec, &sub.name, sub.multi_id)?;
+        let instance = self.instance(spec, &sub.name, sub.multi_id);
         self.instances.push(instance);
-        Ok((s, self.instances.len() as u32))
+        (s, self.instances.len() as u32)
     }
 
-    /// Makes the file of a new instance.
-    fn open(
-        &mut self,
-        spec: ColumnSpec,
-        topic: &str,
-        multi_id: u8,
-    ) -> Result<Instance, ConvertError> {
+    /// A new instance: its file's name (the file is made with its first row group).
+    fn instance(&mut self, spec: ColumnSpec, topic: &str, multi_id: u8) -> Instance {
         let converter = self.converter;
-        let layout = converter.options.layout;
-        let (path, collided) = layout.table_path(
+        let (path, collided) = converter.options.layout.table_path(
             &converter.root,
             &self.log_dir,
             &mut self.names,
-            &mut self.topic_dirs,
+            &converter.topic_dirs,
             topic,
             multi_id,
         );
@@ -478,54 +559,40 @@ impl<'c> Pass<'c> {
                 path.display()
             ));
         }
-        let io = |path: &Path| {
-            let path = path.to_owned();
-            move |source| ConvertError::Io { path, source }
-        };
-        let dir = path.parent().unwrap_or(&converter.root);
-        std::fs::create_dir_all(dir).map_err(io(dir))?;
         let partial = partial_path(&path);
-        let file = File::create(&partial).map_err(io(&partial))?;
-        let table =
-            Table::new(spec, topic, multi_id, file, &converter.options).map_err(|source| {
-                ConvertError::Parquet {
-                    path: path.clone(),
-                    topic: topic.to_owned(),
-                    multi_id,
-                    source,
-                }
-            })?;
-        Ok(Instance {
+        // Removed if the conversion fails (if it was made at all).
+        self.outputs.paths.push(partial.clone());
+        let table = Table::new(
+            spec,
+            topic,
+            multi_id,
+            Reopening::new(partial.clone()),
+            &converter.options,
+        );
+        Instance {
             topic: topic.to_owned(),
             multi_id,
             path,
             partial,
+            window: Admission::new(converter.options.window),
             table,
             memory: 0,
-        })
-    }
-
-    /// Removes what a failed pass wrote.
-    fn discard(self) {
-        for inst in self.instances {
-            let partial = inst.partial.clone();
-            drop(inst);
-            let _ = std::fs::remove_file(partial);
         }
     }
 
-    /// Closes every table with the log's identity, and writes `metadata.json`.
+    /// Closes every table with the log's identity, writes `metadata.json`, then gives every
+    /// file its name, and removes the files of an earlier conversion of this log that this
+    /// one did not write.
     fn finish(
         mut self,
         identity: &LogIdentity,
         meta: &crate::read::Metadata,
         bytes: u64,
     ) -> Result<Conversion, ConvertError> {
+        let root = self.converter.root.clone();
         let mut files = Vec::with_capacity(self.instances.len());
-        let mut failure = None;
-        let instances = std::mem::take(&mut self.instances);
-        let mut partials = Vec::new();
-        for inst in instances {
+        let mut renames = Vec::new();
+        for inst in std::mem::take(&mut self.instances) {
             let Instance {
                 topic,
                 multi_id,
@@ -534,45 +601,26 @@ impl<'c> Pass<'c> {
                 table,
                 ..
             } = inst;
-            if failure.is_some() {
-                drop(table);
-                partials.push(partial);
-                continue;
-            }
-            let closed = table
-                .close(identity)
+            let (written, TableWritten { rows, row_groups }) = table
+                .close(identity, false)
                 .map_err(|source| ConvertError::Parquet {
                     path: path.clone(),
                     topic: topic.clone(),
                     multi_id,
                     source,
-                });
-            let done = closed.and_then(|TableWritten { rows, row_groups }| {
-                std::fs::rename(&partial, &path).map_err(|source| ConvertError::Io {
-                    path: path.clone(),
-                    source,
                 })?;
-                Ok(WrittenFile {
-                    path,
-                    topic,
-                    multi_id,
-                    rows,
-                    row_groups,
-                })
+            if !written {
+                // No row in the window: no file.
+                continue;
+            }
+            renames.push((partial, path.clone()));
+            files.push(WrittenFile {
+                path,
+                topic,
+                multi_id,
+                rows,
+                row_groups,
             });
-            match done {
-                Ok(f) => files.push(f),
-                Err(e) => {
-                    failure = Some(e);
-                    partials.push(partial);
-                }
-            }
-        }
-        if let Some(e) = failure {
-            for p in partials {
-                let _ = std::fs::remove_file(p);
-            }
-            return Err(e);
         }
         let mut topics: Vec<TopicSummary> = self.summaries.into_iter().map(|s| s.topic).collect();
         topics.sort_by(|a, b| (&a.name, a.multi_id).cmp(&(&b.name, b.multi_id)));
@@ -588,36 +636,77 @@ impl<'c> Pass<'c> {
                 skipped: &self.skipped,
             },
         );
-        let root = &self.converter.root;
         let metadata = self
             .converter
             .options
             .layout
-            .metadata_path(root, &self.log_dir);
+            .metadata_path(&root, &self.log_dir);
+        let earlier = earlier_files(&root, &metadata);
         let document = MetadataJson {
             log: identity,
             facts: &facts,
             files: files
                 .iter()
                 .map(|f| FileEntry {
-                    path: f.path.strip_prefix(root).unwrap_or(&f.path).to_path_buf(),
+                    path: f.path.strip_prefix(&root).unwrap_or(&f.path).to_path_buf(),
                     topic: &f.topic,
                     multi_id: f.multi_id,
                     rows: f.rows,
                 })
                 .collect(),
         };
-        write_json(&metadata, &document)?;
+        let metadata_partial = partial_path(&metadata);
+        self.outputs.paths.push(metadata_partial.clone());
+        write_json(&metadata_partial, &document)?;
+        renames.push((metadata_partial, metadata.clone()));
+        for (from, to) in &renames {
+            std::fs::rename(from, to).map_err(|source| ConvertError::Io {
+                path: to.clone(),
+                source,
+            })?;
+            self.outputs.paths.push(to.clone());
+        }
+        self.outputs.kept = true;
+        for old in earlier {
+            if !files.iter().any(|f| f.path == old) {
+                let _ = std::fs::remove_file(&old);
+            }
+        }
         Ok(Conversion {
             log: identity.file_name.clone(),
-            log_dir: self.log_dir,
+            log_dir: self.log_dir.clone(),
             bytes,
             files,
             metadata,
-            skipped: self.skipped,
-            notes: self.notes,
+            skipped: std::mem::take(&mut self.skipped),
+            notes: std::mem::take(&mut self.notes),
         })
     }
+}
+
+/// The Parquet files an earlier conversion listed in its `metadata.json` (inside `root`,
+/// named `*.parquet`), to remove those the new one does not write.
+fn earlier_files(root: &Path, metadata: &Path) -> Vec<PathBuf> {
+    let Ok(text) = std::fs::read(metadata) else {
+        return Vec::new();
+    };
+    let Ok(doc) = serde_json::from_slice::<serde_json::Value>(&text) else {
+        return Vec::new();
+    };
+    let Some(files) = doc.get("files").and_then(|f| f.as_array()) else {
+        return Vec::new();
+    };
+    files
+        .iter()
+        .filter_map(|f| f.get("path")?.as_str())
+        .map(Path::new)
+        .filter(|p| {
+            p.components()
+                .all(|c| matches!(c, std::path::Component::Normal(_)))
+                && p.extension().is_some_and(|e| e == "parquet")
+        })
+        .map(|p| root.join(p))
+        .collect()
 }
 
 fn parquet_error(inst: &Instance, source: ParquetError) -> ConvertError {
@@ -663,10 +752,9 @@ fn write_json(path: &Path, document: &impl Serialize) -> Result<(), ConvertError
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir).map_err(io)?;
     }
-    let partial = partial_path(path);
-    let mut out = io::BufWriter::new(File::create(&partial).map_err(io)?);
+    let mut out = io::BufWriter::new(File::create(path).map_err(io)?);
     serde_json::to_writer_pretty(&mut out, document).map_err(|e| io(e.into()))?;
     io::Write::write_all(&mut out, b"\n").map_err(io)?;
     out.into_inner().map_err(|e| io(e.into_error()))?;
-    std::fs::rename(&partial, path).map_err(io)
+    Ok(())
 }

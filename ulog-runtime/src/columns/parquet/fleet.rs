@@ -12,6 +12,7 @@ use crate::file_names::FileNames;
 /// Where the files of a conversion go, under the output folder `DIR`. Names from the log
 /// pass through [`file_names`](crate::file_names), so none writes outside `DIR`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
 pub enum Layout {
     /// A folder per log: `DIR/<stem>/<topic>_<multi_id>.parquet` and
     /// `DIR/<stem>/metadata.json`.
@@ -35,14 +36,14 @@ impl Layout {
     }
 
     /// The path of a topic instance's file; the other topic name it collided with, if its
-    /// name had to be made unique. `names` are the log's (per-log layout) or its topics'
-    /// folders (hive), as `topic_dirs` remembers them.
+    /// name had to be made unique. `names` are the log's file names (per-log layout);
+    /// `topic_dirs` the topics' folders (hive), the same for every log of a converter.
     pub(super) fn table_path(
         self,
         root: &Path,
         log_dir: &str,
         names: &mut FileNames,
-        topic_dirs: &mut HashMap<String, String>,
+        topic_dirs: &Mutex<TopicDirs>,
         topic: &str,
         multi_id: u8,
     ) -> (PathBuf, Option<String>) {
@@ -52,14 +53,16 @@ impl Layout {
                 (root.join(log_dir).join(name.file_name), name.collided_with)
             }
             Layout::Hive => {
+                let mut dirs = topic_dirs.lock().unwrap_or_else(|e| e.into_inner());
+                let TopicDirs { names, dirs } = &mut *dirs;
                 let mut collided = None;
-                let dir = topic_dirs.entry(topic.to_owned()).or_insert_with(|| {
+                let dir = dirs.entry(topic.to_owned()).or_insert_with(|| {
                     let name = names.unique("topic=", topic, "");
                     collided = name.collided_with;
                     name.file_name
                 });
                 (
-                    root.join(dir)
+                    root.join(dir.as_str())
                         .join(log_dir)
                         .join(format!("multi_id={multi_id}"))
                         .join("data.parquet"),
@@ -76,6 +79,13 @@ impl Layout {
             Layout::Hive => root.join("metadata").join(log_dir).join("metadata.json"),
         }
     }
+}
+
+/// The topics' folders of a hive layout: distinct topics never share one.
+#[derive(Debug, Default)]
+pub(super) struct TopicDirs {
+    names: FileNames,
+    dirs: HashMap<String, String>,
 }
 
 impl Converter {

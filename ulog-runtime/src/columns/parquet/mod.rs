@@ -36,10 +36,12 @@ use parquet::file::metadata::KeyValue;
 use parquet::file::properties::{EnabledStatistics, WriterProperties};
 
 pub use convert::{Conversion, ConvertError, Converter, WrittenFile};
+
 pub use fleet::Layout;
 
 use super::{ColumnBuilder, ColumnSpec, Window, arrow::record_batch};
 use crate::read::{Log, Metadata, Row, Subscription};
+
 use crate::schema::{FieldKind, Primitive, Schema};
 
 /// How Parquet files are written.
@@ -49,19 +51,23 @@ pub struct ParquetOptions {
     pub zstd_level: i32,
     /// Most rows in one row group.
     pub row_group_rows: usize,
-    /// Memory for the rows waiting for their row group, all files of one log together:
+    /// Memory for the rows waiting for their row group, all tables of one log together:
     /// when they pass it, the table holding most is encoded and written as a row group.
-    /// Peak memory of a conversion is about twice this (the rows, and one row group being
-    /// encoded), plus [`ParquetOptions::batch_bytes`] per topic instance, plus the log's
-    /// own metadata (formats, parameters, logged messages).
+    /// A conversion's memory is this, plus while a row group is encoded its encoded pages
+    /// and a ZSTD context per column (a few hundred KB each for columns of many rows), plus
+    /// per table the batch being filled ([`ParquetOptions::batch_bytes`]) and the footer
+    /// metadata of its row groups so far, plus what the log says besides its rows
+    /// (formats, parameters, logged messages, parameter changes, dropouts: kept for
+    /// `metadata.json`). On the 400 MB benchmark log (70 tables) the whole process peaks
+    /// at 53 MiB with the default 16 MiB.
     pub buffer_bytes: usize,
-    /// Row data collected per topic instance before it is encoded (a batch; at least one
-    /// row).
+    /// Row data collected per topic instance before it is made an Arrow record batch (at
+    /// least one row).
     pub batch_bytes: usize,
     /// Dictionary encoding (off: flight data rarely repeats enough to gain from it, and
     /// dictionaries hold memory).
     pub dictionary: bool,
-    /// Page statistics (min/max per page and a page index) as well as per row group.
+    /// Min/max statistics per page (the column index) as well as per row group.
     pub page_statistics: bool,
     /// Only these topics (all if empty).
     pub topics: Vec<String>,
@@ -288,9 +294,27 @@ pub struct TableWritten {
     pub row_groups: usize,
 }
 
+/// Why [`write_topic`] wrote nothing.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum TableError {
+    /// The log has no such topic instance, or cannot decode its rows.
+    #[error("no topic instance `{topic}` #{multi_id} with rows that can be read")]
+    NoSuchInstance {
+        /// The topic asked for.
+        topic: String,
+        /// The instance asked for.
+        multi_id: u8,
+    },
+    /// Parquet refused the table, or writing failed.
+    #[error(transparent)]
+    Parquet(#[from] ParquetError),
+}
+
 /// Writes one topic instance of a whole-file log (every subscription of that name and
-/// `multi_id`, rows of `options.window` only) as a Parquet file to `out`, with `identity`
-/// in its key-value metadata. `None` if the log has no such instance or cannot decode it.
+/// `multi_id`, rows in file order, of `options.window` only) as a Parquet file to `out`,
+/// with `identity` in its key-value metadata. Row groups are written when the rows
+/// waiting pass `options.buffer_bytes` or `options.row_group_rows`.
 ///
 /// ```
 /// use ulog_runtime::{Log, ULog, Writer, WriterOptions};
@@ -305,8 +329,7 @@ pub struct TableWritten {
 /// let log = Log::from_vec(w.into_inner())?;
 /// let identity = LogIdentity::of_log(&log, "flight.ulg");
 /// let mut file = Vec::new();
-/// let written = write_topic(&log, "battery", 0, &identity, &mut file, &ParquetOptions::default())
-///     .unwrap()?;
+/// let written = write_topic(&log, "battery", 0, &identity, &mut file, &ParquetOptions::default())?;
 /// assert_eq!(written.rows, 1);
 /// assert_eq!(&file[..4], b"PAR1");
 /// # Ok::<(), Box<dyn std::error::Error>>(())
@@ -318,52 +341,27 @@ pub fn write_topic<W: Write + Send>(
     identity: &LogIdentity,
     out: W,
     options: &ParquetOptions,
-) -> Option<Result<TableWritten, ParquetError>> {
-    let subs: Vec<&Subscription> = log
-        .subscriptions()
-        .iter()
-        .filter(|s| s.name == topic && s.multi_id == multi_id && s.format().is_some())
-        .collect();
-    let id = subs.first()?.format()?;
-    let spec = ColumnSpec::of(log.metadata().schema(), id)?;
-    let mut table = match Table::new(spec, topic, multi_id, out, options) {
-        Ok(t) => t,
-        Err(e) => return Some(Err(e)),
+) -> Result<TableWritten, TableError> {
+    let subs = log.instance(topic, multi_id);
+    let no_such = || TableError::NoSuchInstance {
+        topic: topic.to_owned(),
+        multi_id,
     };
-    let rows = subs.iter().flat_map(|s| log.rows(s));
-    let result = (|| {
-        for row in rows {
-            match table.admit(row.timestamp) {
-                AdmitRow::Skip => continue,
-                AdmitRow::Stop => break,
-                AdmitRow::Take => {}
-            }
-            table.push(row.data, row.timestamp)?;
+    let id = subs.first().and_then(|s| s.format()).ok_or_else(no_such)?;
+    let spec = ColumnSpec::of(log.metadata().schema(), id).ok_or_else(no_such)?;
+    let mut table = Table::new(spec, topic, multi_id, out, options);
+    let mut window = Admission::new(options.window);
+    for row in log.instance_rows(&subs) {
+        match window.admit(row.timestamp) {
+            AdmitRow::Skip => continue,
+            AdmitRow::Stop => break,
+            AdmitRow::Take => {}
         }
-        table.close(identity)
-    })();
-    Some(result)
-}
-
-/// One table being written: rows collected into batches, batches held until they make a
-/// row group, each row group encoded and written at once. (A row group in progress holds
-/// a ZSTD context per column, a few hundred kilobytes each once it has compressed a page:
-/// encoding row groups one at a time, instead of keeping one open per table, is what keeps
-/// a conversion of a log with thousands of columns within its budget.)
-struct Table<W: Write + Send> {
-    builder: ColumnBuilder,
-    schema: arrow_schema::SchemaRef,
-    writer: ArrowWriter<W>,
-    batch_rows: usize,
-    row_group_rows: usize,
-    /// Batches of the next row group.
-    pending: Vec<arrow_array::RecordBatch>,
-    pending_rows: usize,
-    pending_bytes: usize,
-    window: Window,
-    started: bool,
-    stopped: bool,
-    rows: usize,
+        if table.push(row.data, row.timestamp)? && table.memory() > options.buffer_bytes {
+            table.write_row_group()?;
+        }
+    }
+    Ok(table.close(identity, true)?.1)
 }
 
 /// What to do with a row of a table.
@@ -373,36 +371,23 @@ enum AdmitRow {
     Stop,
 }
 
-impl<W: Write + Send> Table<W> {
-    fn new(
-        spec: ColumnSpec,
-        topic: &str,
-        multi_id: u8,
-        out: W,
-        options: &ParquetOptions,
-    ) -> Result<Table<W>, ParquetError> {
-        let schema = super::arrow::schema(&spec, topic);
-        let kv = table_key_values(topic, multi_id, spec.format());
-        let row_group_rows = options.row_group_rows.max(1);
-        let batch_rows = options.batch_rows(spec.row_len()).min(row_group_rows);
-        let writer = ArrowWriter::try_new(out, schema.clone(), Some(options.properties(kv)?))?;
-        Ok(Table {
-            builder: ColumnBuilder::with_capacity(spec, batch_rows),
-            schema,
-            writer,
-            batch_rows,
-            row_group_rows,
-            pending: Vec::new(),
-            pending_rows: 0,
-            pending_bytes: 0,
-            window: options.window,
+/// A [`Window`] applied to one topic instance's rows, in order.
+struct Admission {
+    window: Window,
+    started: bool,
+    stopped: bool,
+}
+
+impl Admission {
+    fn new(window: Window) -> Admission {
+        Admission {
+            window,
             started: false,
             stopped: false,
-            rows: 0,
-        })
+        }
     }
 
-    /// Whether to take the next row, by the window.
+    /// Whether to take the next row.
     #[inline]
     fn admit(&mut self, timestamp: u64) -> AdmitRow {
         if self.stopped {
@@ -420,8 +405,66 @@ impl<W: Write + Send> Table<W> {
             }
         }
     }
+}
 
-    /// Adds a row; returns whether a batch was completed (and the table's memory changed).
+/// One table being written: rows collected into batches, batches held until they make a
+/// row group, each row group encoded and written at once, the file begun only with the
+/// first row group. (A row group in progress holds a ZSTD context per column, a few
+/// hundred kilobytes each once it has compressed a page: encoding row groups one at a
+/// time, instead of keeping one open per table, keeps a log of thousands of columns within
+/// its budget.)
+struct Table<W: Write + Send> {
+    builder: ColumnBuilder,
+    schema: arrow_schema::SchemaRef,
+    /// The writer, once the first row group is written; until then its output and
+    /// properties.
+    writer: Option<ArrowWriter<W>>,
+    out: Option<(W, WriterProperties)>,
+    properties_error: Option<ParquetError>,
+    batch_rows: usize,
+    row_size: usize,
+    row_group_rows: usize,
+    /// Batches of the next row group.
+    pending: Vec<arrow_array::RecordBatch>,
+    pending_rows: usize,
+    pending_bytes: usize,
+    rows: usize,
+}
+
+impl<W: Write + Send> Table<W> {
+    fn new(
+        spec: ColumnSpec,
+        topic: &str,
+        multi_id: u8,
+        out: W,
+        options: &ParquetOptions,
+    ) -> Table<W> {
+        let schema = super::arrow::schema(&spec, topic);
+        let kv = table_key_values(topic, multi_id, spec.format());
+        let row_group_rows = options.row_group_rows.max(1);
+        let row_size = spec.stored_row_size();
+        let batch_rows = options.batch_rows(row_size).min(row_group_rows);
+        let (out, properties_error) = match options.properties(kv) {
+            Ok(p) => (Some((out, p)), None),
+            Err(e) => (None, Some(e)),
+        };
+        Table {
+            builder: ColumnBuilder::with_capacity(spec, batch_rows),
+            schema,
+            writer: None,
+            out,
+            properties_error,
+            batch_rows,
+            row_size,
+            row_group_rows,
+            pending: Vec::new(),
+            pending_rows: 0,
+            pending_bytes: 0,
+            rows: 0,
+        }
+    }
+
+    /// Adds a row; returns whether a batch was completed (and the table's memory grew).
     #[inline]
     fn push(&mut self, data: &[u8], timestamp: u64) -> Result<bool, ParquetError> {
         if self.builder.push(data, timestamp) {
@@ -451,22 +494,39 @@ impl<W: Write + Send> Table<W> {
         Ok(())
     }
 
-    /// Memory the table holds: its batches waiting for their row group.
+    /// Memory the table holds: its batches waiting for their row group, and the rows of
+    /// the batch being filled.
     fn memory(&self) -> usize {
-        self.pending_bytes
+        self.pending_bytes + self.builder.rows() * self.row_size
     }
 
-    /// Encodes and writes the pending batches as one row group.
+    /// The writer, made on first use.
+    fn writer(&mut self) -> Result<&mut ArrowWriter<W>, ParquetError> {
+        if self.writer.is_none() {
+            if let Some(e) = self.properties_error.take() {
+                return Err(e);
+            }
+            let (out, props) = self.out.take().expect("an output until the writer is made");
+            self.writer = Some(ArrowWriter::try_new(out, self.schema.clone(), Some(props))?);
+        }
+        Ok(self.writer.as_mut().expect("just made"))
+    }
+
+    /// Encodes and writes the pending batches as one row group, then flushes the output.
     fn write_row_group(&mut self) -> Result<(), ParquetError> {
         if self.pending.is_empty() {
             return Ok(());
         }
-        for batch in self.pending.drain(..) {
-            self.writer.write(&batch)?;
+        let pending = std::mem::take(&mut self.pending);
+        let writer = self.writer()?;
+        for batch in &pending {
+            writer.write(batch)?;
         }
+        writer.flush()?;
+        writer.sync()?;
         self.pending_rows = 0;
         self.pending_bytes = 0;
-        self.writer.flush()
+        Ok(())
     }
 
     /// Writes everything collected, as a row group.
@@ -475,16 +535,40 @@ impl<W: Write + Send> Table<W> {
         self.write_row_group()
     }
 
-    /// Writes what is left and the footer, with the log's identity.
-    fn close(mut self, identity: &LogIdentity) -> Result<TableWritten, ParquetError> {
+    /// The output, once the file is begun (to close a file handle between row groups:
+    /// the writer is synced after each).
+    fn output(&mut self) -> Option<&mut W> {
+        self.writer.as_mut().map(ArrowWriter::inner_mut)
+    }
+
+    /// Writes what is left and the footer, with the log's identity; a table without rows
+    /// is written only if `always`. Returns whether a file was written.
+    fn close(
+        mut self,
+        identity: &LogIdentity,
+        always: bool,
+    ) -> Result<(bool, TableWritten), ParquetError> {
         self.flush()?;
-        for kv in identity.key_values() {
-            self.writer.append_key_value_metadata(kv);
+        if self.writer.is_none() && !always {
+            return Ok((
+                false,
+                TableWritten {
+                    rows: 0,
+                    row_groups: 0,
+                },
+            ));
         }
-        let meta = self.writer.close()?;
-        Ok(TableWritten {
-            rows: self.rows,
-            row_groups: meta.num_row_groups(),
-        })
+        let writer = self.writer()?;
+        for kv in identity.key_values() {
+            writer.append_key_value_metadata(kv);
+        }
+        let meta = writer.finish()?;
+        Ok((
+            true,
+            TableWritten {
+                rows: self.rows,
+                row_groups: meta.num_row_groups(),
+            },
+        ))
     }
 }

@@ -162,44 +162,173 @@ fn a_log_becomes_a_file_per_instance_with_its_identity() {
     std::fs::remove_dir_all(&root).unwrap();
 }
 
+/// Every file's `voltage_v` and `cells[2]` columns, by file name, and its row groups.
+fn battery_values(root: &Path, conv: &Conversion) -> Vec<(String, Vec<f32>, Vec<u16>, usize)> {
+    conv.files
+        .iter()
+        .filter(|f| f.topic == "battery")
+        .map(|f| {
+            let (batches, _, groups) = read(&f.path);
+            let v = column::<Float32Array>(&batches, "voltage_v")
+                .iter()
+                .flat_map(|a| a.values().iter().copied())
+                .collect();
+            let c = column::<arrow_array::UInt16Array>(&batches, "cells[2]")
+                .iter()
+                .flat_map(|a| a.values().iter().copied())
+                .collect();
+            let name = f.path.strip_prefix(root).unwrap().display().to_string();
+            (name, v, c, groups)
+        })
+        .collect()
+}
+
 #[test]
 fn a_small_budget_writes_more_row_groups_of_the_same_rows() {
-    let bytes = log_bytes(20_000);
-    let convert = |options: ParquetOptions, name: &str| {
+    let rows = 20_000u64;
+    let bytes = log_bytes(rows);
+    // What the log was written with: instance 0 every row, instance 1 every other.
+    let expected = |multi_id: u64| -> (Vec<f32>, Vec<u16>) {
+        (0..rows)
+            .filter(|t| multi_id == 0 || t % 2 == 0)
+            .map(|t| (t as f32 / 8.0, t as u16))
+            .unzip()
+    };
+    for (name, options, groups) in [
+        ("budget-default", ParquetOptions::default(), [1, 1]),
+        (
+            "budget-small",
+            ParquetOptions {
+                buffer_bytes: 16 << 10,
+                batch_bytes: 1 << 10,
+                ..ParquetOptions::default()
+            },
+            [0, 0],
+        ),
+        (
+            "budget-rows",
+            ParquetOptions {
+                row_group_rows: 3000,
+                ..ParquetOptions::default()
+            },
+            [7, 4],
+        ),
+    ] {
         let root = temp(name);
         let conv = Converter::new(&root, options)
             .convert_reader(&bytes[..], "f.ulg")
             .unwrap();
-        let (batches, _, groups) = read(&conv.files[0].path);
-        let v: Vec<f32> = column::<Float32Array>(&batches, "voltage_v")
-            .iter()
-            .flat_map(|a| a.values().iter().copied())
-            .collect();
+        let files = battery_values(&root, &conv);
+        assert_eq!(files.len(), 2, "{name}");
+        for (m, (file, v, c, g)) in files.into_iter().enumerate() {
+            let (ev, ec) = expected(m as u64);
+            assert_eq!(file, format!("f/battery_{m}.parquet"));
+            assert!(v == ev && c == ec, "{name}: {file} holds other values");
+            match groups[m] {
+                0 => assert!(g > 5, "{name}: {file}: {g} row groups"),
+                n => assert_eq!(g, n, "{name}: {file}"),
+            }
+        }
         std::fs::remove_dir_all(&root).unwrap();
-        (v, groups)
-    };
-    let (whole, one) = convert(ParquetOptions::default(), "budget-default");
-    let (split, many) = convert(
+    }
+}
+
+#[test]
+fn rows_of_a_reused_msg_id_go_to_the_topic_subscribed_last() {
+    use crate::read::{FileHeader, FlagBits, Message};
+    let mut bytes = FileHeader {
+        version: 1,
+        start_timestamp: 0,
+    }
+    .to_bytes()
+    .to_vec();
+    let mut put = |m: Message<'_>| m.encode(&mut bytes).unwrap();
+    put(Message::FlagBits(FlagBits::default()));
+    put(Message::Format(b"a:uint64_t timestamp;uint8_t x;"));
+    put(Message::Format(
+        b"b:uint64_t timestamp;uint16_t y;uint16_t z;",
+    ));
+    put(Message::Subscribe {
+        multi_id: 0,
+        msg_id: 0,
+        name: b"a",
+    });
+    put(Message::Data {
+        msg_id: 0,
+        data: &[1, 0, 0, 0, 0, 0, 0, 0, 9],
+    });
+    put(Message::Unsubscribe { msg_id: 0 });
+    put(Message::Subscribe {
+        multi_id: 0,
+        msg_id: 0,
+        name: b"b",
+    });
+    put(Message::Data {
+        msg_id: 0,
+        data: &[2, 0, 0, 0, 0, 0, 0, 0, 5, 0, 6, 0],
+    });
+    put(Message::Data {
+        msg_id: 0,
+        data: &[3, 0, 0, 0, 0, 0, 0, 0, 7, 0, 8, 0],
+    });
+    let root = temp("reuse");
+    let conv = Converter::new(&root, ParquetOptions::default())
+        .convert_reader(&bytes[..], "r.ulg")
+        .unwrap();
+    let rows: Vec<(&str, usize)> = conv
+        .files
+        .iter()
+        .map(|f| (f.topic.as_str(), f.rows))
+        .collect();
+    assert_eq!(rows, [("a", 1), ("b", 2)]);
+    let (batches, _, _) = read(&conv.files[1].path);
+    let z: Vec<u16> = column::<arrow_array::UInt16Array>(&batches, "z")
+        .iter()
+        .flat_map(|a| a.values().iter().copied())
+        .collect();
+    assert_eq!(z, [6, 8]);
+    std::fs::remove_dir_all(&root).unwrap();
+}
+
+#[test]
+fn a_new_conversion_of_a_log_replaces_the_files_of_the_earlier_one() {
+    let root = temp("again");
+    let converter = Converter::new(&root, ParquetOptions::default());
+    converter
+        .convert_reader(&log_bytes(10)[..], "f.ulg")
+        .unwrap();
+    assert!(root.join("f/sensors_gyro_0.parquet").is_file());
+    // The same log name, now converted with only one topic: the others' files go.
+    let only = Converter::new(
+        &root,
         ParquetOptions {
-            buffer_bytes: 16 << 10,
-            batch_bytes: 1 << 10,
+            topics: vec!["battery".into()],
             ..ParquetOptions::default()
         },
-        "budget-small",
     );
-    let (capped, rows_capped) = convert(
+    let conv = only.convert_reader(&log_bytes(10)[..], "f.ulg").unwrap();
+    assert_eq!(conv.files.len(), 2);
+    let mut names: Vec<String> = std::fs::read_dir(root.join("f"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        ["battery_0.parquet", "battery_1.parquet", "metadata.json"]
+    );
+    // A window no row of an instance falls in: no file for it.
+    let late = Converter::new(
+        &root,
         ParquetOptions {
-            row_group_rows: 3000,
+            window: Window::seconds(Some(1.0), None),
             ..ParquetOptions::default()
         },
-        "budget-rows",
     );
-    assert_eq!(one, 1);
-    assert!(many > 5, "{many} row groups");
-    assert_eq!(rows_capped, 7, "20000 rows in groups of at most 3000");
-    assert_eq!(whole.len(), 20_000);
-    assert_eq!(whole, split);
-    assert_eq!(whole, capped);
+    let conv = late.convert_reader(&log_bytes(10)[..], "g.ulg").unwrap();
+    assert!(conv.files.is_empty(), "{:?}", conv.files);
+    assert!(root.join("g/metadata.json").is_file());
+    std::fs::remove_dir_all(&root).unwrap();
 }
 
 #[test]
@@ -256,9 +385,7 @@ fn write_topic_takes_the_window_and_says_what_it_wrote() {
         },
         ..ParquetOptions::default()
     };
-    let written = write_topic(&log, "battery", 0, &identity, file, &options)
-        .unwrap()
-        .unwrap();
+    let written = write_topic(&log, "battery", 0, &identity, file, &options).unwrap();
     assert_eq!(
         written,
         TableWritten {
@@ -274,7 +401,11 @@ fn write_topic_takes_the_window_and_says_what_it_wrote() {
     assert_eq!(ts, (10..20).collect::<Vec<_>>());
     assert_eq!(kv["ulog.file_name"], "x.ulg");
     std::fs::remove_file(&path).unwrap();
-    assert!(write_topic(&log, "nope", 0, &identity, Vec::new(), &options).is_none());
+    let none = write_topic(&log, "nope", 0, &identity, Vec::new(), &options).unwrap_err();
+    assert_eq!(
+        none.to_string(),
+        "no topic instance `nope` #0 with rows that can be read"
+    );
 }
 
 #[test]
@@ -321,21 +452,36 @@ fn the_start_date_comes_from_the_header_or_the_first_gps_fix() {
 }
 
 #[test]
-fn a_failed_conversion_leaves_no_partial_files() {
-    let bytes = log_bytes(10);
+fn a_failed_conversion_leaves_no_file_behind() {
+    let bytes = log_bytes(5000);
     let root = temp("fail");
-    // The log folder is a file: nothing can be made inside it.
-    std::fs::create_dir_all(&root).unwrap();
-    std::fs::write(root.join("f"), b"in the way").unwrap();
-    let err = Converter::new(&root, ParquetOptions::default())
+    // The second table's file cannot be made (a folder is in its place), after the first
+    // table has written row groups: nothing of the log may stay.
+    std::fs::create_dir_all(root.join("f/battery_1.parquet.partial")).unwrap();
+    let options = ParquetOptions {
+        buffer_bytes: 4 << 10,
+        batch_bytes: 1 << 10,
+        ..ParquetOptions::default()
+    };
+    let err = Converter::new(&root, options)
         .convert_reader(&bytes[..], "f.ulg")
         .unwrap_err();
-    assert!(matches!(err, ConvertError::Io { .. }), "{err}");
     assert!(
         err.to_string()
-            .starts_with(&root.join("f").display().to_string()),
+            .contains("battery_1.parquet: topic `battery` #1"),
         "{err}"
     );
+    let mut left: Vec<String> = std::fs::read_dir(root.join("f"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    left.sort();
+    assert_eq!(
+        left,
+        ["battery_1.parquet.partial"],
+        "only the folder in the way is left"
+    );
+    // Not a log: nothing made at all.
     let not_ulog = Converter::new(&root, ParquetOptions::default())
         .convert_reader(&b"not a log at all"[..], "g.ulg")
         .unwrap_err();
