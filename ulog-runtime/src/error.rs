@@ -186,6 +186,9 @@ pub enum DiagnosticKind {
         key: String,
         /// What is odd and how the value is kept.
         reason: String,
+        /// Whether the key or a text value is not UTF-8 (pyulog's tools fail on it
+        /// without `-i`).
+        not_utf8: bool,
     },
     /// An `I`/`M`/`P`/`Q` key or value that cannot be decoded; it is left out.
     #[error("invalid `{key}` value: {reason}")]

@@ -13,6 +13,8 @@
 //!   and the messages of a log as pyulog's `ulog_messages` lists them.
 //! - [`columns`]: a topic instance as typed columns (and, with features, Arrow record
 //!   batches and Parquet files).
+//! - [`tools`]: what pyulog's command-line tools compute (parameters in their formats, a
+//!   multi info value, the KML track, the GPS dump), byte for byte.
 //! - [`file_names`]: safe, unique file names for exports that write a file per topic.
 //!
 //! ```no_run
@@ -43,6 +45,7 @@ pub mod file_names;
 pub mod pytext;
 pub mod read;
 pub mod schema;
+pub mod tools;
 pub mod typed;
 pub mod value;
 pub mod write;

@@ -17,11 +17,9 @@
 //! them out), and an event whose arguments are cut short ends the list with a note (pyulog
 //! stops with a Python error).
 
-use std::collections::HashSet;
-
 use super::{EventError, decode};
+use crate::Value;
 use crate::read::{Log, LoggedMessage};
-use crate::{DiagnosticKind, Value};
 
 /// What a line shows.
 #[derive(Debug, Clone, PartialEq)]
@@ -107,22 +105,11 @@ fn level_name(m: &LoggedMessage) -> &'static str {
 
 /// The lines of pyulog's `ulog_messages` for `log` ([module docs](self)).
 pub fn messages(log: &Log<'_>) -> Messages {
-    let mut out = Messages::default();
+    let mut out = Messages {
+        warnings: crate::tools::pyulog_warnings(log),
+        ..Messages::default()
+    };
     let meta = log.metadata();
-    if meta.header().version > 1 {
-        out.warnings
-            .push("Warning: unknown file version. Will attempt to read it anyway".to_owned());
-    }
-    let mut warned = HashSet::new();
-    for d in log.diagnostics() {
-        if let DiagnosticKind::UnknownMsgId { msg_id } = d.kind
-            && warned.insert(msg_id)
-        {
-            out.warnings.push(format!(
-                "Warning: no subscription found for message id {msg_id}. Continuing, but file is most likely corrupt"
-            ));
-        }
-    }
     let strings = log.logged_messages().iter().map(|m| {
         if !m.valid_utf8 {
             out.invalid_utf8.push(m.offset);

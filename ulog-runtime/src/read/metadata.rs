@@ -833,6 +833,7 @@ struct Decoded {
     raw: Vec<u8>,
     key_text: String,
     problems: Vec<String>,
+    not_utf8: bool,
 }
 
 impl Decoded {
@@ -841,6 +842,7 @@ impl Decoded {
         (!self.problems.is_empty()).then(|| DiagnosticKind::KeptValue {
             key: self.key_text.clone(),
             reason: self.problems.join("; "),
+            not_utf8: self.not_utf8,
         })
     }
 }
@@ -850,6 +852,7 @@ impl Decoded {
 /// as far as it fits (or kept as bytes), and each oddity is noted.
 fn decode_key_value(kv: KeyValue<'_>) -> Decoded {
     let (key_text, key_valid) = text_of(kv.key);
+    let mut not_utf8 = !key_valid;
     let mut problems = Vec::new();
     if !key_valid {
         problems.push("the key is not UTF-8 (the invalid bytes are left out)".to_owned());
@@ -889,6 +892,7 @@ fn decode_key_value(kv: KeyValue<'_>) -> Decoded {
             // The text is the whole value, whatever length the key declares (as pyulog reads it).
             let (text, valid) = text_of(&raw);
             if !valid {
+                not_utf8 = true;
                 problems.push("the text is not UTF-8 (the invalid bytes are left out)".to_owned());
             }
             Value::String(text)
@@ -917,6 +921,7 @@ fn decode_key_value(kv: KeyValue<'_>) -> Decoded {
         raw,
         key_text,
         problems,
+        not_utf8,
     }
 }
 

@@ -19,6 +19,7 @@ pub use message::{
     MESSAGE_HEADER_LEN, MalformedMessage, Message, MessageTooLarge, MessageType, SYNC_MAGIC,
     UtcTime,
 };
+pub(crate) use metadata::text_of;
 pub use metadata::{
     DefaultParameter, Dropout, Info, LogLevel, LoggedMessage, Metadata, MultiInfo, ParamValue,
     Parameter, ParameterChange, Subscription, VersionInfo,

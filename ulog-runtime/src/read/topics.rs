@@ -146,6 +146,33 @@ impl Skipped {
 }
 
 impl Log<'_> {
+    /// File offsets of the messages with text that is not UTF-8 (names, keys, formats,
+    /// info values, logged strings), whose invalid bytes the reader left out. pyulog's tools
+    /// fail on such a log unless given `-i`; `ulog`'s verbs do the same.
+    pub fn not_utf8(&self) -> Vec<u64> {
+        use crate::DiagnosticKind as K;
+        let mut at: Vec<u64> = self
+            .diagnostics()
+            .iter()
+            .filter(|d| {
+                matches!(
+                    d.kind,
+                    K::InvalidUtf8 { .. } | K::KeptValue { not_utf8: true, .. }
+                )
+            })
+            .map(|d| d.offset)
+            .chain(
+                self.logged_messages()
+                    .iter()
+                    .filter(|m| !m.valid_utf8)
+                    .map(|m| m.offset),
+            )
+            .collect();
+        at.sort_unstable();
+        at.dedup();
+        at
+    }
+
     /// What was left out while reading, from [`Log::diagnostics`], grouped as an export
     /// reports it.
     pub fn skipped(&self) -> Skipped {

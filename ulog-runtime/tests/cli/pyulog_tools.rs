@@ -36,34 +36,88 @@ pub(crate) fn pyulog_tool(module: &str, args: &[&str], dir: Option<&Path>) -> Op
     out
 }
 
+/// One pyulog tool run of [`pyulog_batch`].
+pub(crate) struct ToolRun {
+    pub(crate) status: i64,
+    pub(crate) stdout: String,
+    pub(crate) stderr: String,
+}
+
+/// Runs many pyulog tool invocations `(module, args)` in one Python process
+/// (`tests/py/tools.py`: each log parsed once); `None` when pyulog is not installed (a
+/// failure under CI).
+pub(crate) fn pyulog_batch(runs: &[(&str, Vec<String>)]) -> Option<Vec<ToolRun>> {
+    use std::io::Write;
+    pyulog_tool("core", &["--help"], None)?;
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/py/tools.py");
+    let input = serde_json::to_vec(
+        &runs
+            .iter()
+            .map(|(m, a)| serde_json::json!({"module": m, "args": a}))
+            .collect::<Vec<_>>(),
+    )
+    .unwrap();
+    let mut child = Command::new("python3")
+        .arg(script)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .expect("python3 runs");
+    child.stdin.take().unwrap().write_all(&input).unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "tests/py/tools.py failed");
+    let results: Vec<serde_json::Value> = serde_json::from_slice(&out.stdout).unwrap();
+    Some(
+        results
+            .into_iter()
+            .map(|r| ToolRun {
+                status: r["status"].as_i64().unwrap(),
+                stdout: r["stdout"].as_str().unwrap().to_owned(),
+                stderr: r["stderr"].as_str().unwrap().to_owned(),
+            })
+            .collect(),
+    )
+}
+
 #[test]
 fn messages_equal_ulog_messages_on_every_corpus_log() {
-    let (mut logs, mut lines, mut with_events) = (0, 0, 0);
+    let files = corpus_files();
+    let runs: Vec<(&str, Vec<String>)> = files
+        .iter()
+        .map(|p| ("messages", vec![p.display().to_string()]))
+        .collect();
+    let Some(theirs) = pyulog_batch(&runs) else {
+        return;
+    };
+    let (mut lines, mut with_events) = (0, 0);
     let mut failures = Vec::new();
-    for path in corpus_files() {
-        let file = path.to_str().unwrap();
-        let Some(theirs) = pyulog_tool("messages", &[file], None) else {
-            return;
-        };
-        assert!(theirs.status.success(), "ulog_messages {file} failed");
-        let ours = stdout(&["messages", file]);
-        let expected = String::from_utf8(theirs.stdout).unwrap();
-        if ours != expected {
+    for (path, t) in files.iter().zip(&theirs) {
+        assert_eq!(
+            t.status,
+            0,
+            "ulog_messages {}: {}",
+            path.display(),
+            t.stderr
+        );
+        let ours = stdout(&["messages", path.to_str().unwrap()]);
+        if ours != t.stdout {
             failures.push(format!(
-                "{}: ours\n{ours}\npyulog's\n{expected}",
-                short_name(&path)
+                "{}: ours\n{ours}\npyulog's\n{}",
+                short_name(path),
+                t.stdout
             ));
         }
-        logs += 1;
-        lines += expected.lines().count();
-        if ulog_runtime::Log::open(&path)
-            .is_ok_and(|l| l.topics().iter().any(|t| t.name == "event"))
+        lines += t.stdout.lines().count();
+        if ulog_runtime::Log::open(path).is_ok_and(|l| l.topics().iter().any(|t| t.name == "event"))
         {
             with_events += 1;
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
-    eprintln!("{logs} logs ({with_events} with events), {lines} lines equal to ulog_messages'");
+    eprintln!(
+        "{} logs ({with_events} with events), {lines} lines equal to ulog_messages'",
+        files.len()
+    );
 }
 
 #[test]
@@ -132,4 +186,295 @@ fn messages_without_ignore_refuse_text_that_is_not_utf8() {
     }
     assert_eq!(ours, "0:00:02.000 INFO: caf ok\n");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn params_equal_ulog_params_in_every_format_on_every_corpus_log() {
+    let options: [&[&str]; 9] = [
+        &["-f", "csv"],
+        &["-f", "octave"],
+        &["-f", "qgc"],
+        &["-f", "octave", "-i"],
+        &["-t"],
+        &["-i"],
+        &["-l", ";"],
+        &["-d", "system"],
+        &["-d", "current_setup"],
+    ];
+    let dir = temp_dir("params-out");
+    let mut runs = Vec::new();
+    let mut ours = Vec::new();
+    for (n, path) in corpus_files().iter().enumerate() {
+        let file = path.to_str().unwrap().to_owned();
+        for opts in options {
+            let mut args = vec![file.clone()];
+            args.extend(opts.iter().map(|o| o.to_string()));
+            let mut mine = vec!["params".to_owned()];
+            mine.extend(args.iter().cloned());
+            ours.push((short_name(path), mine));
+            runs.push(("params", args));
+        }
+        // The output file argument.
+        let theirs = dir.join(format!("theirs{n}.txt")).display().to_string();
+        let mine = dir.join(format!("ours{n}.txt")).display().to_string();
+        runs.push((
+            "params",
+            vec![file.clone(), theirs, "-f".into(), "qgc".into()],
+        ));
+        ours.push((
+            short_name(path),
+            vec!["params".into(), file, mine, "-f".into(), "qgc".into()],
+        ));
+    }
+    let Some(theirs) = pyulog_batch(&runs) else {
+        return;
+    };
+    let mut failures = Vec::new();
+    for ((name, args), t) in ours.iter().zip(&theirs) {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = ulog(&args);
+        // pyulog fails on -d when the log has no default parameters; so must we.
+        if (t.status == 0) != o.status.success() || t.stdout.as_bytes() != o.stdout {
+            failures.push(format!("{name} {:?}: {}", &args[2..], t.stderr));
+        }
+    }
+    for n in 0..corpus_files().len() {
+        let (a, b) = (
+            dir.join(format!("ours{n}.txt")),
+            dir.join(format!("theirs{n}.txt")),
+        );
+        if std::fs::read(&a).ok() != std::fs::read(&b).ok() {
+            failures.push(format!("log {n}: qgc to a file"));
+        }
+    }
+    assert!(failures.is_empty(), "differ from ulog_params: {failures:?}");
+    eprintln!("{} ulog_params runs equal byte for byte", theirs.len());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn info_m_equals_ulog_info_m_for_every_multi_info_of_every_log() {
+    let mut runs = Vec::new();
+    for path in corpus_files() {
+        let file = path.to_str().unwrap().to_owned();
+        let log = ulog_runtime::Log::open(&path).unwrap();
+        let mut keys: Vec<String> = log
+            .metadata()
+            .multi_info()
+            .iter()
+            .map(|m| m.key.clone())
+            .collect();
+        keys.push("no_such_message".to_owned());
+        for key in keys {
+            for newline in [false, true] {
+                let mut args = vec![file.clone(), "-m".to_owned(), key.clone()];
+                if newline {
+                    args.push("-n".to_owned());
+                }
+                runs.push(("info", args));
+            }
+        }
+    }
+    let Some(theirs) = pyulog_batch(&runs) else {
+        return;
+    };
+    let mut failures = Vec::new();
+    for ((_, args), t) in runs.iter().zip(&theirs) {
+        let mut mine = vec!["info"];
+        mine.extend(args.iter().map(String::as_str));
+        let o = ulog(&mine);
+        if !o.status.success() || t.stdout.as_bytes() != o.stdout {
+            failures.push(format!("{args:?}"));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "differ from ulog_info -m: {failures:?}"
+    );
+    eprintln!("{} ulog_info -m runs equal byte for byte", theirs.len());
+}
+
+/// The coordinates of a KML document, line by line of its `<coordinates>`.
+fn kml_points(text: &str) -> Vec<String> {
+    text.split("<coordinates>")
+        .skip(1)
+        .flat_map(|c| {
+            c.split("</coordinates>")
+                .next()
+                .unwrap()
+                .split(' ')
+                .map(str::to_owned)
+        })
+        .collect()
+}
+
+#[test]
+fn kml_equals_ulog2kml_on_every_corpus_log() {
+    let dir = temp_dir("kml");
+    let files = corpus_files();
+    let path_of = |who: &str, n: usize| dir.join(format!("{who}{n}.kml"));
+    let runs: Vec<(&str, Vec<String>)> = files
+        .iter()
+        .enumerate()
+        .map(|(n, p)| {
+            let out = path_of("theirs", n).display().to_string();
+            (
+                "ulog2kml",
+                vec![p.display().to_string(), "-o".to_owned(), out],
+            )
+        })
+        .collect();
+    let Some(theirs) = pyulog_batch(&runs) else {
+        return;
+    };
+    let (mut same, mut failing) = (0, 0);
+    let mut failures = Vec::new();
+    for (n, (path, run)) in files.iter().zip(&theirs).enumerate() {
+        let ours = path_of("ours", n);
+        let mine = ulog(&["kml", path.to_str().unwrap(), "-o", ours.to_str().unwrap()]);
+        if run.status != 0 {
+            // pyulog finds no track (no GPS topic): neither do we.
+            if mine.status.success() {
+                failures.push(format!(
+                    "{}: pyulog fails, we wrote a track",
+                    short_name(path)
+                ));
+            }
+            failing += 1;
+            continue;
+        }
+        if run.stdout.as_bytes() != mine.stdout {
+            failures.push(format!("{}: stdout", short_name(path)));
+        }
+        let (a, b) = (
+            std::fs::read_to_string(&ours).unwrap(),
+            std::fs::read_to_string(path_of("theirs", n)).unwrap(),
+        );
+        let log = ulog_runtime::Log::open(path).unwrap();
+        if a == b {
+            same += 1;
+        } else if log.diagnostics().iter().any(|d| d.is_corruption()) {
+            // A damaged log: we keep rows pyulog cannot see after the damage. Its points
+            // must be ours, in order, with the same lines.
+            let (ours, theirs) = (kml_points(&a), kml_points(&b));
+            let mut rest = ours.iter();
+            if !theirs.iter().all(|p| rest.any(|q| q == p))
+                || a.matches("<Placemark").count() != b.matches("<Placemark").count()
+            {
+                failures.push(format!(
+                    "{}: track differs beyond the damage",
+                    short_name(path)
+                ));
+            }
+        } else {
+            failures.push(format!("{}: KML differs", short_name(path)));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:?}");
+    eprintln!(
+        "{same} tracks equal to ulog2kml's byte for byte; {failing} logs without a track for both"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A log with a `gps_dump` topic as PX4 logs it: two receivers, both directions.
+fn gps_dump_log(dir: &Path, with_instance: bool, dropout: bool) -> std::path::PathBuf {
+    use ulog_runtime::{Writer, WriterOptions};
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    let format = if with_instance {
+        "gps_dump:uint64_t timestamp;uint8_t instance;uint8_t len;uint8_t[79] data;uint8_t[5] _padding0;"
+    } else {
+        "gps_dump:uint64_t timestamp;uint8_t len;uint8_t[79] data;"
+    };
+    w.format(format).unwrap();
+    let sub = w.subscribe("gps_dump", 0).unwrap();
+    for i in 0..40u8 {
+        let receiver = i % 2;
+        let to_device = i % 3 == 0;
+        let n = 1 + (u16::from(i) * 7 % 79) as u8;
+        let mut row = (u64::from(i) * 1000).to_le_bytes().to_vec();
+        if with_instance {
+            row.push(receiver);
+        }
+        row.push(if to_device { n | 0x80 } else { n });
+        row.extend((0..79u8).map(|k| k.wrapping_mul(i).wrapping_add(receiver)));
+        w.data(sub, &row).unwrap();
+        if dropout && i == 20 {
+            w.dropout(30).unwrap();
+        }
+    }
+    let name = format!("dump_{with_instance}_{dropout}.ulg");
+    let path = dir.join(name);
+    std::fs::write(&path, w.into_inner()).unwrap();
+    path
+}
+
+#[test]
+fn gps_dump_equals_ulog_extract_gps_dump_byte_for_byte() {
+    let dir = temp_dir("gps-dump");
+    let (ours, theirs) = (dir.join("ours"), dir.join("theirs"));
+    std::fs::create_dir_all(&ours).unwrap();
+    std::fs::create_dir_all(&theirs).unwrap();
+    let mut compared = 0;
+    for (with_instance, dropout) in [(true, false), (true, true), (false, false)] {
+        let log = gps_dump_log(&dir, with_instance, dropout);
+        let file = log.to_str().unwrap();
+        for instance in ["0", "1"] {
+            let Some(run) = pyulog_tool(
+                "extract_gps_dump",
+                &[file, "-o", theirs.to_str().unwrap(), "-i", instance],
+                None,
+            ) else {
+                return;
+            };
+            assert!(run.status.success());
+            let mine = stdout(&[
+                "gps-dump",
+                file,
+                "-o",
+                ours.to_str().unwrap(),
+                "-i",
+                instance,
+            ]);
+            let expected = String::from_utf8(run.stdout)
+                .unwrap()
+                .replace(theirs.to_str().unwrap(), ours.to_str().unwrap());
+            assert_eq!(mine, expected);
+            for entry in std::fs::read_dir(&theirs).unwrap() {
+                let name = entry.unwrap().file_name();
+                let (a, b) = (
+                    std::fs::read(ours.join(&name)).unwrap(),
+                    std::fs::read(theirs.join(&name)).unwrap(),
+                );
+                assert_eq!(a, b, "{name:?}");
+                assert!(
+                    !b.is_empty() || (!with_instance && instance == "1"),
+                    "{name:?}"
+                );
+                compared += 1;
+            }
+        }
+    }
+    // A log without the topic: pyulog's message, exit 0.
+    let plain = dir.join("plain.ulg");
+    std::fs::write(&plain, gps_free_log()).unwrap();
+    let text = stdout(&["gps-dump", plain.to_str().unwrap()]);
+    if let Some(run) = pyulog_tool("extract_gps_dump", &[plain.to_str().unwrap()], Some(&dir)) {
+        assert_eq!(text, String::from_utf8(run.stdout).unwrap());
+    }
+    assert!(
+        text.ends_with("does not contain gps_dump messages!\n"),
+        "{text}"
+    );
+    eprintln!("{compared} gps dump files equal to pyulog's");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+fn gps_free_log() -> Vec<u8> {
+    use ulog_runtime::{Writer, WriterOptions};
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    w.format("t:uint64_t timestamp;").unwrap();
+    let sub = w.subscribe("t", 0).unwrap();
+    w.data(sub, &1u64.to_le_bytes()).unwrap();
+    w.into_inner()
 }

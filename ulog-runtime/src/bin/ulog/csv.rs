@@ -28,10 +28,15 @@ pub(crate) struct Args {
     /// Only rows before this time, in seconds (pyulog's `-te`, `--time_e`).
     #[arg(long, alias = "time_e")]
     end: Option<f64>,
+    /// Leave out bytes of text that are not UTF-8 (pyulog's `-i`); without it such text is
+    /// an error.
+    #[arg(short, long)]
+    ignore: bool,
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     let log = crate::open(&args.file)?;
+    crate::check_utf8(&log, &args.file, args.ignore)?;
     crate::check_topics(&log, &args.file, &args.messages)?;
     let options = CsvOptions {
         delimiter: args.delimiter.clone(),

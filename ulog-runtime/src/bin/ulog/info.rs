@@ -11,7 +11,7 @@ use ulog_runtime::{Log, Value};
 use crate::Failure;
 use ulog_runtime::pytext::{f32_text, f64_text};
 
-/// `ulog info FILE [-v]`.
+/// `ulog info FILE [-v] [-m NAME [-n]] [-i]`.
 #[derive(clap::Args)]
 pub(crate) struct Args {
     /// The log.
@@ -19,10 +19,31 @@ pub(crate) struct Args {
     /// Also perf_* info, multi info values and every diagnostic.
     #[arg(short, long)]
     verbose: bool,
+    /// Only this multi info message, every value joined, as pyulog's `ulog_info -m` prints
+    /// it (binary values in hexadecimal).
+    #[arg(short, long)]
+    message: Option<String>,
+    /// With `-m`: a newline between the parts of a value.
+    #[arg(short, long, requires = "message")]
+    newline: bool,
+    /// Leave out bytes of text that are not UTF-8 (pyulog's `-i`); without it such text is
+    /// an error.
+    #[arg(short, long)]
+    ignore: bool,
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
-    info(&crate::open(&args.file)?, &args.file, args.verbose, out)
+    let log = crate::open(&args.file)?;
+    crate::check_utf8(&log, &args.file, args.ignore)?;
+    if let Some(name) = &args.message {
+        crate::pyulog_warnings(&log, out)?;
+        match ulog_runtime::tools::multi_info_text(log.metadata(), name, args.newline) {
+            Some(text) => out.write_all(text.as_bytes())?,
+            None => writeln!(out, "message {name} not found")?,
+        }
+        return Ok(());
+    }
+    info(&log, &args.file, args.verbose, out)
 }
 
 /// `h:mm:ss` of a microsecond count, as pyulog prints it.

@@ -12,8 +12,10 @@ use ulog_runtime::Log;
 mod check_msg;
 mod codegen;
 mod csv;
+mod gps_dump;
 mod info;
 mod json;
+mod kml;
 mod messages;
 mod params;
 mod parquet;
@@ -36,6 +38,10 @@ enum Command {
     Messages(messages::Args),
     /// One CSV per subscription, `<stem>_<topic>_<multi_id>.csv`, as pyulog's `ulog2csv`.
     Csv(csv::Args),
+    /// A KML track of the GPS topic, colored by flight mode, as pyulog's `ulog2kml`.
+    Kml(kml::Args),
+    /// The raw GPS byte streams of the gps_dump topic, as pyulog's `ulog_extract_gps_dump`.
+    GpsDump(gps_dump::Args),
     /// Per-topic Parquet files and a metadata.json per log, many logs in parallel
     /// (`DIR/<stem>/<topic>_<multi_id>.parquet`, or hive partitions with `--layout hive`).
     Parquet(parquet::Args),
@@ -139,6 +145,8 @@ fn run(command: Command, out: &mut impl Write) -> Result<(), Failure> {
         Command::Csv(args) => csv::run(&args, out),
         Command::Json(args) => json::run(&args, out),
         Command::Parquet(args) => parquet::run(&args, out),
+        Command::Kml(args) => kml::run(&args, out),
+        Command::GpsDump(args) => gps_dump::run(&args, out),
         Command::Codegen(args) => codegen::run(&args, out),
         Command::CheckMsg(args) => check_msg::run(&args, out),
     }
@@ -161,6 +169,28 @@ pub(crate) fn open(path: &Path) -> Result<Log<'static>, Failure> {
         ulog_runtime::ReadError::Io(io) => Failure::at(path, plain(&io)),
         other => Failure::at(path, other),
     })
+}
+
+/// Prints what pyulog prints while it reads (its warnings), as the verbs that mirror a
+/// pyulog tool do before their output.
+pub(crate) fn pyulog_warnings(log: &Log<'_>, out: &mut impl Write) -> Result<(), Failure> {
+    for w in ulog_runtime::tools::pyulog_warnings(log) {
+        writeln!(out, "{w}")?;
+    }
+    Ok(())
+}
+
+/// As pyulog's tools without `-i`: text that is not UTF-8 anywhere in the log is an error.
+pub(crate) fn check_utf8(log: &Log<'_>, path: &Path, ignore: bool) -> Result<(), Failure> {
+    match log.not_utf8().first() {
+        Some(at) if !ignore => Err(Failure::at(
+            path,
+            format!(
+                "at byte {at}: text that is not valid UTF-8 (-i leaves out the invalid bytes, as pyulog's -i does)"
+            ),
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// Checks that every topic of a `-m` list is one the log defines; the error names the
