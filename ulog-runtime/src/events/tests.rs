@@ -511,3 +511,61 @@ fn without_usable_metadata_the_rows_stay_and_the_reason_is_given() {
     );
     assert_eq!(m.lines.len(), 2, "the logged strings still");
 }
+
+#[test]
+fn every_integer_type_reads_little_endian_with_its_sign() {
+    let mut args = Vec::new();
+    args.extend_from_slice(&0xfffeu16.to_le_bytes());
+    args.extend_from_slice(&(-2i16).to_le_bytes());
+    args.extend_from_slice(&4_000_000_000u32.to_le_bytes());
+    args.extend_from_slice(&(-5i32).to_le_bytes());
+    args.push(0x80);
+    assert_eq!(
+        message(
+            "{1} {2} {3} {4} {5}",
+            &["uint16_t", "int16_t", "uint32_t", "int32_t", "int8_t"],
+            &args
+        )
+        .unwrap(),
+        "65534 -2 4000000000 -5 -128"
+    );
+}
+
+#[test]
+fn a_stream_decodes_the_same_events_as_the_whole_file() {
+    let bytes = log_with_events(&[500, 1169], None);
+    let whole = Log::from_vec(bytes.clone()).unwrap().events();
+    let mut reader = crate::StreamReader::new(&bytes[..]).unwrap();
+    let (mut layout, mut metadata, mut rows): (Option<EventLayout>, _, _) =
+        (None, None, Vec::new());
+    while let Some(event) = reader.next_event().unwrap() {
+        // The subscription's format id; the layout is made once the event is done with.
+        let subscribed = match &event {
+            crate::Event::Subscription(s) if s.name == TOPIC => s.format(),
+            crate::Event::Row(row) => {
+                if let Some(l) = &layout {
+                    rows.push(l.read(row).unwrap());
+                }
+                None
+            }
+            _ => None,
+        };
+        if let Some(id) = subscribed {
+            layout = Some(EventLayout::of(reader.metadata().schema(), id).unwrap());
+            metadata = Some(EventsMetadata::of(reader.metadata()).unwrap());
+        }
+    }
+    assert_eq!(rows, whole.rows);
+    let defs = &metadata.unwrap().definitions;
+    let messages: Vec<_> = rows
+        .iter()
+        .map(|r| decode(r, defs).map(|e| e.message))
+        .collect();
+    let expected: Vec<_> = whole
+        .rows
+        .iter()
+        .map(|r| decode(r, &whole.metadata.as_ref().unwrap().definitions).map(|e| e.message))
+        .collect();
+    assert_eq!(messages, expected);
+    assert_eq!(messages[0], Ok(Ok("Armed by 7".to_owned())));
+}

@@ -478,3 +478,80 @@ fn gps_free_log() -> Vec<u8> {
     w.data(sub, &1u64.to_le_bytes()).unwrap();
     w.into_inner()
 }
+
+/// A log with an older PX4's GPS topic (`int32_t` degrees × 1e7), flight modes and camera
+/// triggers, written by the writer.
+fn kml_log(dir: &Path) -> std::path::PathBuf {
+    use ulog_runtime::{Writer, WriterOptions};
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    w.format("vehicle_gps_position:uint64_t timestamp;int32_t lat;int32_t lon;int32_t alt;uint8_t fix_type;uint8_t[3] _padding0;")
+        .unwrap();
+    w.format("vehicle_status:uint64_t timestamp;uint8_t nav_state;uint8_t[7] _padding0;")
+        .unwrap();
+    w.format("camera_capture:uint64_t timestamp;uint32_t seq;float alt;double lat;double lon;")
+        .unwrap();
+    let gps = w.subscribe("vehicle_gps_position", 0).unwrap();
+    let status = w.subscribe("vehicle_status", 0).unwrap();
+    let camera = w.subscribe("camera_capture", 0).unwrap();
+    for i in 0..200u64 {
+        let t = 1_000_000 + i * 50_000;
+        if i % 60 == 0 {
+            let mut row = t.to_le_bytes().to_vec();
+            // Without the trailing padding, as PX4 logs rows (pyulog refuses longer ones).
+            row.push([2u8, 4, 17, 5][(i / 60) as usize % 4]);
+            w.data(status, &row).unwrap();
+        }
+        let mut row = t.to_le_bytes().to_vec();
+        row.extend_from_slice(&(473_977_418 + i as i32 * 13).to_le_bytes());
+        row.extend_from_slice(&(85_455_939 - i as i32 * 7).to_le_bytes());
+        row.extend_from_slice(&(488_005 + i as i32 * 3).to_le_bytes());
+        row.push(if i % 17 == 5 { 1 } else { 3 });
+        w.data(gps, &row).unwrap();
+        if i % 50 == 10 {
+            let mut row = t.to_le_bytes().to_vec();
+            row.extend_from_slice(&(i as u32 / 50).to_le_bytes());
+            row.extend_from_slice(&(490.1f32 + i as f32).to_le_bytes());
+            row.extend_from_slice(&(47.397 + i as f64 * 1e-6).to_le_bytes());
+            row.extend_from_slice(&(8.545 - i as f64 * 1e-6).to_le_bytes());
+            w.data(camera, &row).unwrap();
+        }
+    }
+    let path = dir.join("track.ulg");
+    std::fs::write(&path, w.into_inner()).unwrap();
+    path
+}
+
+#[test]
+fn kml_with_camera_triggers_and_flight_modes_equals_ulog2kml() {
+    let dir = temp_dir("kml-camera");
+    let log = kml_log(&dir);
+    let (ours, theirs) = (dir.join("ours.kml"), dir.join("theirs.kml"));
+    let file = log.to_str().unwrap();
+    let args = |out: &Path| {
+        vec![
+            file.to_owned(),
+            "-o".to_owned(),
+            out.display().to_string(),
+            "--camera-trigger".to_owned(),
+            "camera_capture".to_owned(),
+        ]
+    };
+    let Some(run) = pyulog_batch(&[("ulog2kml", args(&theirs))]) else {
+        return;
+    };
+    assert_eq!(run[0].status, 0, "{}", run[0].stderr);
+    let mut mine = vec!["kml".to_owned()];
+    mine.extend(args(&ours));
+    stdout(&mine.iter().map(String::as_str).collect::<Vec<_>>());
+    let (a, b) = (
+        std::fs::read_to_string(&ours).unwrap(),
+        std::fs::read_to_string(&theirs).unwrap(),
+    );
+    assert_eq!(a, b);
+    // A line per flight mode (2, 4, 17, 5; the last row, at the end of the log, is within
+    // 0.1 s of the last point, so no line for the end); four camera triggers.
+    assert_eq!(a.matches("<LineString").count(), 4);
+    assert!(a.contains("<name>vehicle_gps_position:17</name>"));
+    assert_eq!(a.matches("<name>Camera Trigger").count(), 4);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
