@@ -674,3 +674,43 @@ fn odd_logs_keep_at_least_what_pyulog_keeps() {
         }
     }
 }
+
+/// The fuzz targets' checks (`fuzz/src/lib.rs`) on every input the fuzzers once failed on,
+/// kept in `tests/fuzz_regressions/<target>/`: each must now pass.
+#[path = "../../fuzz/src/lib.rs"]
+#[allow(dead_code, unreachable_pub)]
+mod fuzz_checks;
+
+/// A fuzz target's check: panics when the input shows a bug.
+type FuzzCheck = fn(&[u8]);
+
+#[test]
+fn fuzz_regressions_pass() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fuzz_regressions");
+    let targets: [(&str, FuzzCheck); 8] = [
+        ("whole_file", fuzz_checks::whole_file),
+        ("stream_chunks", fuzz_checks::stream_chunks),
+        ("format_roundtrip", fuzz_checks::format_roundtrip),
+        ("layout", fuzz_checks::layout),
+        ("typed", fuzz_checks::typed),
+        ("codegen_log", fuzz_checks::codegen_log),
+        ("codegen_text", fuzz_checks::codegen_text),
+        ("writer_ops", fuzz_checks::writer_ops),
+    ];
+    let mut ran = 0;
+    for (target, check) in targets {
+        let Ok(entries) = std::fs::read_dir(root.join(target)) else {
+            continue;
+        };
+        for entry in entries {
+            let path = entry.unwrap().path();
+            let data = std::fs::read(&path).unwrap();
+            let name = path.display().to_string();
+            let outcome = std::panic::catch_unwind(|| check(&data));
+            assert!(outcome.is_ok(), "{name}: the {target} check fails again");
+            ran += 1;
+        }
+    }
+    assert!(ran > 0, "regression inputs under {}", root.display());
+    eprintln!("{ran} fuzz regressions pass");
+}

@@ -240,12 +240,26 @@ pub(crate) fn read_log(
     })?;
     let schema = log.metadata().schema();
     let place = Place::Log(path.to_owned());
+    // A log may hold formats outside the grammar (the reader keeps them, lax): no Rust
+    // type can be named after them.
+    let in_grammar = |f: &Format| -> Result<(), CodegenError> {
+        match f.to_string().parse::<Format>() {
+            Ok(_) => Ok(()),
+            Err(e) => Err(CodegenError::Unsupported {
+                format: f.name.clone(),
+                place: place.clone(),
+                message: format!(
+                    "its definition `{f}` is outside the format grammar ({e}), so no Rust type can be named after it; pick other topics with `ulog_topics`"
+                ),
+            }),
+        }
+    };
     let Some(topics) = topics else {
-        return Ok(schema
+        return schema
             .formats()
             .iter()
-            .map(|f| Definition::plain(f.clone(), place.clone()))
-            .collect());
+            .map(|f| in_grammar(f).map(|()| Definition::plain(f.clone(), place.clone())))
+            .collect();
     };
     let mut wanted: Vec<&Format> = Vec::new();
     let mut stack: Vec<String> = Vec::new();
@@ -273,12 +287,12 @@ pub(crate) fn read_log(
         wanted.push(format);
     }
     // In the log's order, for stable output.
-    Ok(schema
+    schema
         .formats()
         .iter()
         .filter(|f| wanted.iter().any(|w| w.name == f.name))
-        .map(|f| Definition::plain(f.clone(), place.clone()))
-        .collect())
+        .map(|f| in_grammar(f).map(|()| Definition::plain(f.clone(), place.clone())))
+        .collect()
 }
 
 /// Definitions from laid-out `.msg` files: the files selected by `topics` (all of them when

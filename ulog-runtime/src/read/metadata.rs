@@ -727,6 +727,8 @@ impl Metadata {
             }
             self.resubscriptions
                 .push((msg_id, offset, self.subscriptions.len() as u32));
+            // Rows of this id now look up which subscription they follow.
+            self.resubscribed[usize::from(msg_id / 64)] |= 1 << (msg_id % 64);
             let previous = previous as usize;
             problem = Some(DiagnosticKind::DuplicateMsgId {
                 msg_id,

@@ -73,6 +73,13 @@ pub enum WriteError {
          (`Writer::topic`) or type (`Writer::define`) before writing rows"
     )]
     DefinitionsClosed(String),
+    /// A sync or dropout before any subscription or logged string: readers take the data
+    /// section to begin with one of those (pyulog skips a sync or dropout before it).
+    #[error(
+        "{0} belongs to the data section, which begins with the first subscription or logged \
+         string: subscribe a topic or log a string first (readers skip it before one)"
+    )]
+    NoDataSection(&'static str),
     /// All 65,536 `msg_id`s are used.
     #[error("all 65536 msg_ids are used")]
     TooManySubscriptions,
@@ -186,6 +193,9 @@ pub struct Writer<W: Write> {
     default_parameters: bool,
     /// Whether the data section has begun: formats can no longer be written.
     data_section: bool,
+    /// Whether the file has a message that begins the data section for readers (`A`, `L`,
+    /// `C`).
+    data_marked: bool,
     /// Subscriptions made while the definitions were open, written when the data begins.
     pending: Vec<(SubscriptionId, u8)>,
     buf: Vec<u8>,
@@ -202,6 +212,7 @@ impl<W: Write> Writer<W> {
             next_msg_id: 0,
             default_parameters: options.default_parameters,
             data_section: false,
+            data_marked: false,
             pending: Vec::new(),
             buf: Vec::with_capacity(256),
             row: Vec::with_capacity(256),
@@ -263,6 +274,7 @@ impl<W: Write> Writer<W> {
     /// Ends the definitions section: the waiting subscriptions go out, in `msg_id` order.
     fn begin_data(&mut self) -> Result<(), WriteError> {
         self.data_section = true;
+        self.data_marked |= !self.pending.is_empty();
         for (id, multi_id) in std::mem::take(&mut self.pending) {
             let topic = self.subscriptions[usize::from(id.0)]
                 .as_ref()
@@ -397,6 +409,7 @@ impl<W: Write> Writer<W> {
                 msg_id,
                 name: format.as_bytes(),
             })?;
+            self.data_marked = true;
         } else {
             self.pending.push((SubscriptionId(msg_id), multi_id));
         }
@@ -540,13 +553,14 @@ impl<W: Write> Writer<W> {
 
     /// Writes a logged string (`L`); `level` is the ASCII digit PX4 writes (`b'6'` for info).
     pub fn log(&mut self, level: u8, timestamp: u64, text: &str) -> Result<(), WriteError> {
-        self.begin_data()?;
-        self.put(Message::Logging {
+        self.put_in_data(Message::Logging {
             level,
             tag: None,
             timestamp,
             text: text.as_bytes(),
-        })
+        })?;
+        self.data_marked = true;
+        Ok(())
     }
 
     /// Writes a tagged logged string (`C`).
@@ -557,25 +571,48 @@ impl<W: Write> Writer<W> {
         timestamp: u64,
         text: &str,
     ) -> Result<(), WriteError> {
-        self.begin_data()?;
-        self.put(Message::Logging {
+        self.put_in_data(Message::Logging {
             level,
             tag: Some(tag),
             timestamp,
             text: text.as_bytes(),
-        })
+        })?;
+        self.data_marked = true;
+        Ok(())
     }
 
-    /// Writes a sync message (`S`), which lets readers recover from corruption.
+    /// Writes a sync message (`S`), which lets readers recover from corruption. It belongs
+    /// to the data section: before any subscription or logged string it is refused
+    /// ([`WriteError::NoDataSection`]).
     pub fn sync(&mut self) -> Result<(), WriteError> {
-        self.begin_data()?;
-        self.put(Message::Sync)
+        self.data_section_for("a sync message")?;
+        self.put_in_data(Message::Sync)
     }
 
-    /// Writes a dropout (`O`) of `duration_ms` milliseconds.
+    /// Writes a dropout (`O`) of `duration_ms` milliseconds. It belongs to the data section:
+    /// before any subscription or logged string it is refused
+    /// ([`WriteError::NoDataSection`]).
     pub fn dropout(&mut self, duration_ms: u16) -> Result<(), WriteError> {
+        self.data_section_for("a dropout")?;
+        self.put_in_data(Message::Dropout { duration_ms })
+    }
+
+    /// Refuses a message that cannot begin the data section for readers before it has begun.
+    fn data_section_for(&self, what: &'static str) -> Result<(), WriteError> {
+        if !self.data_marked && self.pending.is_empty() {
+            return Err(WriteError::NoDataSection(what));
+        }
+        Ok(())
+    }
+
+    /// Writes a message of the data section, beginning it if needed; a message that cannot
+    /// be encoded is refused before anything is written.
+    fn put_in_data(&mut self, m: Message<'_>) -> Result<(), WriteError> {
+        let mut bytes = Vec::new();
+        m.encode(&mut bytes)?;
         self.begin_data()?;
-        self.put(Message::Dropout { duration_ms })
+        self.out().write_all(&bytes)?;
+        Ok(())
     }
 }
 
@@ -718,6 +755,7 @@ impl Writer<std::fs::File> {
             next_msg_id,
             default_parameters: bits.has_default_parameters(),
             data_section: true,
+            data_marked: true,
             pending: Vec::new(),
             buf: Vec::with_capacity(256),
             row: Vec::with_capacity(256),

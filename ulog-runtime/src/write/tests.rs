@@ -266,3 +266,38 @@ fn appending_sets_the_flag_and_the_offset() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn sync_and_dropout_wait_for_the_data_section_and_refusals_write_nothing() {
+    // Found by the writer_ops fuzzer: a sync before any subscription went into the
+    // definitions section, where readers skip it (pyulog drops such a dropout).
+    let mut w = new_writer(false);
+    w.format("t:uint64_t timestamp;").unwrap();
+    let before = w.get_ref().len();
+    assert!(matches!(
+        w.sync(),
+        Err(WriteError::NoDataSection("a sync message"))
+    ));
+    assert!(matches!(
+        w.dropout(5),
+        Err(WriteError::NoDataSection("a dropout"))
+    ));
+    assert_eq!(w.get_ref().len(), before);
+    // A parameter is still an initial one.
+    w.parameter("P", ParamValue::Int32(1)).unwrap();
+    let sub = w.subscribe("t", 0).unwrap();
+    // A logged string too long for its message is refused before the waiting subscription
+    // goes out.
+    let before = w.get_ref().len();
+    assert!(w.log(b'6', 0, &"x".repeat(70_000)).is_err());
+    assert_eq!(w.get_ref().len(), before, "nothing written");
+    w.sync().unwrap();
+    w.dropout(5).unwrap();
+    w.data(sub, &7u64.to_le_bytes()).unwrap();
+    let log = Log::from_vec(w.into_inner()).unwrap();
+    assert!(log.diagnostics().is_empty());
+    assert_eq!(log.metadata().initial_parameters().len(), 1);
+    assert_eq!(log.dropouts().len(), 1);
+    assert_eq!(log.metadata().sync_count(), 1);
+    assert_eq!(log.row_count(), 1);
+}

@@ -194,3 +194,57 @@ fn a_version_1_file_without_flag_bits_and_an_absolute_start_time() {
         .is_none()
     );
 }
+
+#[test]
+fn a_msg_id_given_to_another_topic_keeps_each_row_with_its_subscription() {
+    // Found by the whole_file fuzzer: rows before the second `A` of a msg_id were counted
+    // as the later topic's.
+    let mut f = File::v1(0);
+    f.msg(Message::Format(b"a:uint64_t timestamp;uint8_t x;"));
+    f.msg(Message::Format(
+        b"b:uint64_t timestamp;uint16_t y;uint16_t z;",
+    ));
+    f.msg(Message::Subscribe {
+        multi_id: 0,
+        msg_id: 0,
+        name: b"a",
+    });
+    f.msg(Message::Data {
+        msg_id: 0,
+        data: &[1, 0, 0, 0, 0, 0, 0, 0, 9],
+    });
+    f.msg(Message::Data {
+        msg_id: 0,
+        data: &[2, 0, 0, 0, 0, 0, 0, 0, 8],
+    });
+    f.msg(Message::Subscribe {
+        multi_id: 0,
+        msg_id: 0,
+        name: b"b",
+    });
+    f.msg(Message::Data {
+        msg_id: 0,
+        data: &[3, 0, 0, 0, 0, 0, 0, 0, 5, 0, 6, 0],
+    });
+    let log = Log::from_vec(f.0).unwrap();
+    let [a, b] = log.subscriptions() else {
+        panic!("two subscriptions");
+    };
+    let rows = |s| {
+        log.rows(s)
+            .map(|r| (r.timestamp, r.subscription.name.clone()))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(rows(a), [(1, "a".to_owned()), (2, "a".to_owned())]);
+    assert_eq!(rows(b), [(3, "b".to_owned())]);
+    let names: Vec<String> = log.data().map(|r| r.subscription.name.clone()).collect();
+    assert_eq!(names, ["a", "a", "b"]);
+    assert_eq!(
+        log.columns("b", 0).unwrap().get("z").unwrap().as_u16(),
+        Some(&[6][..])
+    );
+    assert_eq!(
+        kinds(&log),
+        ["msg_id 0 subscribed again (was `a`), now `b`"]
+    );
+}

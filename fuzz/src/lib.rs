@@ -1,0 +1,524 @@
+//! What each fuzz target checks, one function per target, taking the fuzzer's bytes. The
+//! targets in `fuzz_targets/` call these; `tests/tests/robustness.rs` runs the same
+//! functions on every saved input of `tests/fuzz_regressions/<target>/` under
+//! `cargo test` on stable. Nothing here but `ulog_runtime`, `serde_json` and std, so both can
+//! compile it.
+//!
+//! A check panics (which the fuzzer reports) when the library panics, hangs or
+//! breaks a promise: the streaming reader not yielding what the whole-file reader yields, a
+//! format that does not print back to itself, a layout whose fields leave it, a decoded
+//! value that does not encode back, a writer whose accepted operations do not read back.
+
+#![allow(missing_docs, clippy::missing_panics_doc)]
+
+use std::io::Read;
+
+use ulog_runtime::columns::{ColumnSpec, csv};
+use ulog_runtime::read::ParamValue;
+use ulog_runtime::schema::{Format, Schema};
+use ulog_runtime::{Event, Log, StreamReader, ULog, Value, Writer, WriterOptions};
+
+/// The whole-file reader, and everything built over it: rows and their values, topics,
+/// columns, CSV, events and the messages, pyulog's tools, the JSON document.
+pub fn whole_file(data: &[u8]) {
+    let Ok(log) = Log::from_slice(data) else {
+        return;
+    };
+    for row in log.data() {
+        let _ = row.value();
+    }
+    let _ = log.topics();
+    let _ = log.skipped();
+    let _ = log.not_utf8();
+    for instance in log.instances(&[]) {
+        let sub = instance[0];
+        if let Some(cols) = log.columns(&sub.name, sub.multi_id) {
+            let rows = log.instance_rows(&instance).count();
+            assert_eq!(cols.rows(), rows, "{}: columns of every row", sub.name);
+        }
+        let _ = csv::write_csv(
+            &log,
+            &instance,
+            std::io::sink(),
+            &csv::CsvOptions::default(),
+        );
+    }
+    let events = log.events();
+    if let Ok(m) = &events.metadata {
+        for row in &events.rows {
+            let _ = ulog_runtime::events::decode(row, &m.definitions);
+        }
+    }
+    for line in ulog_runtime::events::messages(&log).lines {
+        let _ = line.pyulog_line();
+    }
+    for format in [
+        ulog_runtime::tools::ParamsFormat::Csv,
+        ulog_runtime::tools::ParamsFormat::Octave,
+        ulog_runtime::tools::ParamsFormat::Qgc,
+    ] {
+        let options = ulog_runtime::tools::ParamsOptions {
+            format,
+            ..Default::default()
+        };
+        let _ = ulog_runtime::tools::params(&log, &options, &mut std::io::sink());
+    }
+    for m in log.metadata().multi_info() {
+        let _ = ulog_runtime::tools::multi_info_text(log.metadata(), &m.key, true);
+    }
+    let _ = ulog_runtime::tools::kml(&log, &Default::default());
+    let _ = ulog_runtime::tools::gps_dump(&log, 0);
+    let facts = ulog_runtime::document::LogFacts::of_log(&log);
+    serde_json::to_vec(&facts).expect("the facts serialize");
+}
+
+/// Reads in chunks of the sizes the first bytes give.
+struct Chunked<'a> {
+    data: &'a [u8],
+    sizes: &'a [u8],
+    turn: usize,
+}
+
+impl Read for Chunked<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let size = match self.sizes {
+            [] => 4096,
+            s => 1 + usize::from(s[self.turn % s.len()]) * 37,
+        };
+        self.turn += 1;
+        let n = buf.len().min(size).min(self.data.len());
+        buf[..n].copy_from_slice(&self.data[..n]);
+        self.data = &self.data[n..];
+        Ok(n)
+    }
+}
+
+/// What a reader gave, to compare.
+#[derive(Debug, Default, PartialEq)]
+struct Seen {
+    rows: Vec<(u64, u16, Vec<u8>)>,
+    logged: Vec<(u64, u64, String)>,
+    changes: Vec<(u64, String)>,
+    dropouts: Vec<(u64, u16)>,
+}
+
+/// The streaming reader fed in chunks of random sizes yields what the whole-file reader
+/// yields: the same rows, logged strings, parameter changes and dropouts. The first byte
+/// gives how many of the next bytes are chunk sizes; the rest is the log.
+pub fn stream_chunks(data: &[u8]) {
+    let Some((&n, rest)) = data.split_first() else {
+        return;
+    };
+    let n = usize::from(n % 8).min(rest.len());
+    let (sizes, log) = rest.split_at(n);
+    let Ok(whole) = Log::from_slice(log) else {
+        assert!(
+            StreamReader::new(log).is_err()
+                || ulog_runtime::read::summarize(log).is_err()
+                || log.len() as u64 > (1 << 40),
+            "the streaming reader takes a log the whole-file reader refuses"
+        );
+        return;
+    };
+    let mut expected = Seen {
+        rows: whole
+            .data()
+            .map(|r| (r.offset, r.subscription.msg_id, r.data.to_vec()))
+            .collect(),
+        ..Seen::default()
+    };
+    expected.logged = whole
+        .logged_messages()
+        .iter()
+        .map(|m| (m.offset, m.timestamp, m.text.clone()))
+        .collect();
+    expected.changes = whole
+        .parameter_changes()
+        .iter()
+        .map(|c| (c.offset, c.name.clone()))
+        .collect();
+    expected.dropouts = whole
+        .dropouts()
+        .iter()
+        .map(|d| (d.offset, d.duration_ms))
+        .collect();
+    let input = Chunked {
+        data: log,
+        sizes,
+        turn: 0,
+    };
+    let mut reader =
+        StreamReader::new(input).expect("the header read as the whole-file reader read it");
+    let mut seen = Seen::default();
+    while let Some(event) = reader.next_event().expect("reading memory does not fail") {
+        match event {
+            Event::Row(r) => seen
+                .rows
+                .push((r.offset, r.subscription.msg_id, r.data.to_vec())),
+            Event::Logged(m) => seen.logged.push((m.offset, m.timestamp, m.text)),
+            Event::ParameterChange(c) => seen.changes.push((c.offset, c.name)),
+            Event::Dropout(d) => seen.dropouts.push((d.offset, d.duration_ms)),
+            _ => {}
+        }
+    }
+    assert_eq!(seen, expected, "stream and whole file differ");
+}
+
+/// A format parses, prints, and parses back to itself; the lax parser never panics.
+pub fn format_roundtrip(data: &[u8]) {
+    let text = String::from_utf8_lossy(data);
+    let _ = Format::parse_lax(&text);
+    if let Ok(f) = text.parse::<Format>() {
+        let printed = f.to_string();
+        let again: Format = printed
+            .parse()
+            .unwrap_or_else(|e| panic!("{printed:?} does not parse back: {e}"));
+        assert_eq!(again, f, "{printed:?}");
+        assert_eq!(again.to_string(), printed);
+    }
+}
+
+/// Formats (one per line) laid out: every field inside its format, in order, the payload
+/// within the size; a row plan and columns for each resolved format.
+pub fn layout(data: &[u8]) {
+    let text = String::from_utf8_lossy(data);
+    let mut schema = Schema::new();
+    for line in text.lines().take(64) {
+        if let Ok(f) = line.parse::<Format>() {
+            let _ = schema.insert(f);
+        }
+    }
+    let _ = schema.resolve_all();
+    for i in 0..schema.len() {
+        let name = schema.formats()[i].name.clone();
+        let Some(id) = schema.id(&name) else { continue };
+        let Some(l) = schema.resolved(id) else {
+            continue;
+        };
+        assert!(l.payload_size <= l.size, "{name}");
+        let mut end = 0;
+        for f in &l.fields {
+            assert!(f.offset >= end, "{name}.{}: overlaps", f.name);
+            end = f.offset + f.size();
+            assert!(end <= l.size, "{name}.{}: outside", f.name);
+        }
+        if ulog_runtime::value::RowPlan::check(&mut schema, id).is_ok() {
+            let spec = ColumnSpec::new(&mut schema, id).expect("a checked format has columns");
+            assert!(spec.row_len() <= schema.resolved(id).expect("resolved").size);
+        }
+    }
+}
+
+#[derive(ULog, Debug, Clone, PartialEq)]
+#[ulog(nested)]
+struct Cell {
+    v: i16,
+    #[ulog(padding)]
+    _pad: [u8; 2],
+    t: f32,
+}
+
+#[derive(ULog, Debug, Clone, PartialEq)]
+struct FuzzTopic {
+    timestamp: u64,
+    cells: [Cell; 3],
+    name: ulog_runtime::typed::Chars<5>,
+    ok: bool,
+    q: [f64; 2],
+    extra: Option<u32>,
+}
+
+/// Typed decoding of a derived struct from arbitrary bytes never panics, and what decodes
+/// encodes back to the same bytes; checked against the struct's own format and against a
+/// format from the input (its first line), which may or may not match.
+pub fn typed(data: &[u8]) {
+    let mut schema = Schema::new();
+    for f in FuzzTopic::FORMAT.formats() {
+        schema.insert(f).expect("its own formats");
+    }
+    let own = ulog_runtime::typed::TypedDecoder::<FuzzTopic>::new(&schema).expect("its own format");
+    if let Some(v) = own.decode(data) {
+        let mut bytes = Vec::new();
+        ulog_runtime::typed::encode_row(&v, &mut bytes);
+        let again = own.decode(&bytes).expect("an encoded row decodes");
+        let mut bytes2 = Vec::new();
+        ulog_runtime::typed::encode_row(&again, &mut bytes2);
+        assert_eq!(bytes, bytes2, "decode(encode(x)) is x");
+    }
+    let split = data.iter().position(|&b| b == b'\n').unwrap_or(data.len());
+    let text = String::from_utf8_lossy(&data[..split]);
+    let mut other = Schema::new();
+    for line in text.split('|') {
+        if let Ok(f) = line.parse::<Format>() {
+            let _ = other.insert(f);
+        }
+    }
+    let _ = other.resolve_all();
+    if let Ok(d) = ulog_runtime::typed::TypedDecoder::<FuzzTopic>::new_as(&other, "fuzz_topic") {
+        let _ = d.decode(data.get(split..).unwrap_or_default());
+    }
+}
+
+/// A file of this process, for inputs the code generator reads from paths.
+fn temp_file(ext: &str, data: &[u8]) -> std::path::PathBuf {
+    let dir = std::path::Path::new("/dev/shm");
+    let dir = if dir.is_dir() {
+        dir.to_path_buf()
+    } else {
+        std::env::temp_dir()
+    };
+    let path = dir.join(format!("ulog-fuzz-{}.{ext}", std::process::id()));
+    std::fs::write(&path, data).expect("a temporary file");
+    path
+}
+
+/// The code generator on a log's `F` definitions never panics; what it renders names every
+/// format it generates.
+pub fn codegen_log(data: &[u8]) {
+    let path = temp_file("ulg", data);
+    let mut b = ulog_runtime::codegen::Builder::new();
+    b.ulog(&path);
+    if let Ok(types) = b.types() {
+        let text = b.render().expect("types render when they generate");
+        for t in types {
+            assert!(text.contains(&format!("struct {}", t.path)), "{}", t.path);
+        }
+    }
+    let _ = std::fs::remove_file(path);
+}
+
+/// The code generator on TOML or `.msg` text (the first byte picks) never panics.
+pub fn codegen_text(data: &[u8]) {
+    let Some((&pick, text)) = data.split_first() else {
+        return;
+    };
+    let mut b = ulog_runtime::codegen::Builder::new();
+    let path = if pick % 2 == 0 {
+        let p = temp_file("toml", text);
+        b.toml(&p);
+        p
+    } else {
+        let p = temp_file("msg", text);
+        b.msg(&p);
+        p
+    };
+    let _ = b.render();
+    let _ = std::fs::remove_file(path);
+}
+
+/// Takes bytes of the input in turn.
+struct Ops<'a>(&'a [u8]);
+
+impl Ops<'_> {
+    fn byte(&mut self) -> Option<u8> {
+        let (&b, rest) = self.0.split_first()?;
+        self.0 = rest;
+        Some(b)
+    }
+
+    fn bytes(&mut self, n: usize) -> Option<&[u8]> {
+        let n = n.min(self.0.len());
+        let (b, rest) = self.0.split_at(n);
+        self.0 = rest;
+        Some(b)
+    }
+
+    fn u64(&mut self) -> Option<u64> {
+        let b = self.bytes(8)?;
+        let mut a = [0; 8];
+        a[..b.len()].copy_from_slice(b);
+        Some(u64::from_le_bytes(a))
+    }
+}
+
+/// Formats the writer operations draw on.
+const FORMATS: [&str; 3] = [
+    "alpha:uint64_t timestamp;float x;uint8_t[3] b;uint8_t[1] _padding0;",
+    "cell:int16_t v;uint8_t[2] _padding0;",
+    "beta:uint64_t timestamp;cell[2] c;char[4] name;bool ok;uint8_t[3] _padding0;",
+];
+const TOPICS: [&str; 2] = ["alpha", "beta"];
+
+/// What the writer was asked and accepted, to compare with what reads back.
+#[derive(Debug, Default)]
+struct Model {
+    subs: Vec<(String, u8)>,
+    rows: Vec<(usize, Vec<u8>)>,
+    logged: Vec<(u8, Option<u16>, u64, String)>,
+    params: Vec<(String, ParamValue, bool)>,
+    dropouts: Vec<u16>,
+    info: Vec<(String, String)>,
+}
+
+/// Arbitrary writer operations: each either fails, writing nothing, or is read back as
+/// written (subscriptions, rows, logged strings, parameters and their changes, dropouts,
+/// info).
+pub fn writer_ops(data: &[u8]) {
+    let mut ops = Ops(data);
+    let start = ops.u64().unwrap_or(0) >> 8;
+    let Ok(mut w) = Writer::new(
+        Vec::new(),
+        WriterOptions {
+            start_timestamp: start,
+            default_parameters: false,
+        },
+    ) else {
+        return;
+    };
+    let mut m = Model::default();
+    let mut ids = Vec::new();
+    for f in FORMATS {
+        w.format(f).expect("the formats are valid");
+    }
+    let mut data_begun = false;
+    for _ in 0..200 {
+        let Some(op) = ops.byte() else { break };
+        let before = w.get_ref().len();
+        let ok = match op % 8 {
+            0 => {
+                let t = TOPICS[usize::from(ops.byte().unwrap_or(0)) % 2];
+                let multi = ops.byte().unwrap_or(0) % 3;
+                match w.subscribe(t, multi) {
+                    Ok(id) => {
+                        ids.push(id);
+                        m.subs.push((t.to_owned(), multi));
+                        // A parameter after the first subscription is a change
+                        // (`Writer::parameter`).
+                        data_begun = true;
+                        true
+                    }
+                    Err(_) => false,
+                }
+            }
+            1 if !ids.is_empty() => {
+                let k = usize::from(ops.byte().unwrap_or(0)) % ids.len();
+                let len = usize::from(ops.byte().unwrap_or(0)) % 40;
+                let row = ops.bytes(len).unwrap_or_default().to_vec();
+                let ok = w.data(ids[k], &row).is_ok();
+                if ok {
+                    m.rows.push((k, row));
+                    data_begun = true;
+                }
+                ok
+            }
+            2 | 3 => {
+                let level = ops.byte().unwrap_or(b'6');
+                let ts = ops.u64().unwrap_or(0);
+                let len = usize::from(ops.byte().unwrap_or(0)) % 30;
+                let text = String::from_utf8_lossy(ops.bytes(len).unwrap_or_default()).into_owned();
+                let tag = (op % 8 == 3).then(|| u16::from(ops.byte().unwrap_or(0)));
+                let ok = match tag {
+                    Some(t) => w.log_tagged(level, t, ts, &text).is_ok(),
+                    None => w.log(level, ts, &text).is_ok(),
+                };
+                if ok {
+                    m.logged.push((level, tag, ts, text));
+                    data_begun = true;
+                }
+                ok
+            }
+            4 => {
+                let name =
+                    ["MC_ROLL_P", "SYS_AUTOSTART", "X"][usize::from(ops.byte().unwrap_or(0)) % 3];
+                let raw = ops.u64().unwrap_or(0) as u32;
+                let value = if raw.is_multiple_of(2) {
+                    ParamValue::Int32(raw as i32)
+                } else {
+                    ParamValue::Float(f32::from_bits(raw))
+                };
+                let ok = w.parameter(name, value).is_ok();
+                if ok {
+                    m.params.push((name.to_owned(), value, data_begun));
+                }
+                ok
+            }
+            5 => {
+                let ms = u16::from(ops.byte().unwrap_or(0));
+                let ok = w.dropout(ms).is_ok();
+                if ok {
+                    m.dropouts.push(ms);
+                    data_begun = true;
+                }
+                ok
+            }
+            6 => {
+                let ok = w.sync().is_ok();
+                data_begun |= ok;
+                ok
+            }
+            _ => {
+                let key = ["sys_name", "ver_hw", "note"][usize::from(ops.byte().unwrap_or(0)) % 3];
+                let len = usize::from(ops.byte().unwrap_or(0)) % 20;
+                let text = String::from_utf8_lossy(ops.bytes(len).unwrap_or_default()).into_owned();
+                let ok = w.info(key, &Value::String(text.clone())).is_ok();
+                if ok {
+                    m.info.retain(|(k, _)| k != key);
+                    m.info.push((key.to_owned(), text));
+                }
+                ok
+            }
+        };
+        if !ok {
+            assert_eq!(
+                w.get_ref().len(),
+                before,
+                "a refused operation wrote nothing"
+            );
+        }
+    }
+    let bytes = w.into_inner();
+    let log = Log::from_slice(&bytes).expect("what the writer writes reads");
+    assert!(log.diagnostics().is_empty(), "{:?}", log.diagnostics());
+    let subs = log.subscriptions();
+    let rows: Vec<(usize, Vec<u8>)> = log
+        .data()
+        .map(|r| {
+            let k = subs
+                .iter()
+                .position(|s| s.msg_id == r.subscription.msg_id)
+                .expect("a subscription");
+            (k, r.data.to_vec())
+        })
+        .collect();
+    assert_eq!(rows, m.rows, "rows, as written");
+    let subscribed: Vec<(String, u8)> = subs.iter().map(|s| (s.name.clone(), s.multi_id)).collect();
+    assert_eq!(subscribed, m.subs, "subscriptions");
+    let logged: Vec<(u8, Option<u16>, u64, String)> = log
+        .logged_messages()
+        .iter()
+        .map(|l| (l.level_byte, l.tag, l.timestamp, l.text.clone()))
+        .collect();
+    assert_eq!(logged, m.logged, "logged strings");
+    let dropouts: Vec<u16> = log.dropouts().iter().map(|d| d.duration_ms).collect();
+    assert_eq!(dropouts, m.dropouts, "dropouts");
+    for (key, text) in &m.info {
+        assert_eq!(
+            log.metadata().info_value(key),
+            Some(&Value::String(text.clone())),
+            "info {key}"
+        );
+    }
+    let changes: Vec<(String, ParamValue)> = log
+        .parameter_changes()
+        .iter()
+        .map(|c| (c.name.clone(), c.value))
+        .collect();
+    let expected: Vec<(String, ParamValue)> = m
+        .params
+        .iter()
+        .filter(|p| p.2)
+        .map(|p| (p.0.clone(), p.1))
+        .collect();
+    assert_eq!(changes.len(), expected.len(), "parameter changes");
+    for ((n, v), (en, ev)) in changes.iter().zip(&expected) {
+        assert_eq!(n, en);
+        assert_eq!(param_bits(*v), param_bits(*ev), "{n}");
+    }
+}
+
+fn param_bits(v: ParamValue) -> (bool, u32) {
+    match v {
+        ParamValue::Int32(i) => (false, i as u32),
+        ParamValue::Float(f) => (true, f.to_bits()),
+    }
+}
