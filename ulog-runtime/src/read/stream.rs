@@ -104,6 +104,25 @@ impl<R: Read> StreamReader<R> {
         })
     }
 
+    /// Reads a log's header and definitions section and stops after the first message of
+    /// the data section (the metadata holds it, e.g. a first subscription): the formats, info, multi info and initial parameters, without reading
+    /// the rows (a few kilobytes of a file of any size). What a tool checks before a pass,
+    /// e.g. that the topics a user asked for are there.
+    ///
+    /// ```no_run
+    /// # fn main() -> Result<(), ulog_runtime::ReadError> {
+    /// use ulog_runtime::StreamReader;
+    /// let file = std::io::BufReader::new(std::fs::File::open("flight.ulg")?);
+    /// let definitions = StreamReader::read_definitions(file)?;
+    /// println!("{} formats", definitions.schema().formats().len());
+    /// # Ok(()) }
+    /// ```
+    pub fn read_definitions(input: R) -> Result<Metadata, ReadError> {
+        let mut reader = StreamReader::new(input)?;
+        while let Some(Event::Definition { .. } | Event::Diagnostic(_)) = reader.next_event()? {}
+        Ok(reader.walker.meta)
+    }
+
     /// Bytes the reader holds for its window of the file: bounded by a few messages
     /// (at most a few hundred kilobytes), whatever the file size.
     pub fn buffered_capacity(&self) -> usize {

@@ -289,20 +289,77 @@ fn parquet_options_select_topics_and_time_and_say_what_they_wrote() {
         topics,
         [("battery", 0, 10), ("battery", 1, 10), ("gps", 0, 10)]
     );
-    // A topic no log has is said.
+    // A topic the log lacks is an error before anything is written, naming the closest.
+    let fresh = dir.join("fresh");
     let run = ulog(&[
         "parquet",
         log.to_str().unwrap(),
         "-o",
-        out.to_str().unwrap(),
+        fresh.to_str().unwrap(),
         "-m",
         "batery",
     ]);
-    assert!(run.status.success());
+    assert_eq!(run.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&run.stderr);
     assert!(
-        String::from_utf8_lossy(&run.stderr).contains("no log has rows of topic `batery`"),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
+        err.contains("small.ulg: no topic `batery` in this log; did you mean `battery`?"),
+        "{err}"
+    );
+    assert!(!fresh.exists(), "nothing is written");
+    // Among several logs, one lacking a topic is said and the others convert; a topic no
+    // log has is an error.
+    let other = dir.join("only_battery.ulg");
+    {
+        use ulog_runtime::{ULog, Writer, WriterOptions};
+        #[derive(ULog)]
+        struct Battery {
+            timestamp: u64,
+            voltage_v: f32,
+        }
+        let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+        let battery = w.topic::<Battery>(0).unwrap();
+        w.write(
+            &battery,
+            &Battery {
+                timestamp: 5,
+                voltage_v: 12.5,
+            },
+        )
+        .unwrap();
+        std::fs::write(&other, w.into_inner()).unwrap();
+    }
+    let both = [log.to_str().unwrap(), other.to_str().unwrap()];
+    let run = ulog(&[
+        "parquet",
+        both[0],
+        both[1],
+        "-o",
+        fresh.to_str().unwrap(),
+        "-m",
+        "gps",
+    ]);
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{err}");
+    assert!(
+        err.contains("only_battery.ulg: no topic `gps` in this log"),
+        "{err}"
+    );
+    assert!(!err.contains("small.ulg: no topic"), "{err}");
+    assert!(fresh.join("small/gps_0.parquet").exists());
+    let run = ulog(&[
+        "parquet",
+        both[0],
+        both[1],
+        "-o",
+        fresh.to_str().unwrap(),
+        "-m",
+        "gsp",
+    ]);
+    assert_eq!(run.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        err.contains("no topic `gsp` in any of the logs; did you mean `gps`?"),
+        "{err}"
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -197,27 +197,25 @@ pub(crate) fn check_utf8(log: &Log<'_>, path: &Path, ignore: bool) -> Result<(),
 /// closest it has.
 pub(crate) fn check_topics(log: &Log<'_>, path: &Path, topics: &[String]) -> Result<(), Failure> {
     let schema = log.metadata().schema();
-    for topic in topics {
-        if schema.get(topic).is_none() {
-            let suggestion = schema.suggest(topic);
-            let hint = match suggestion.as_slice() {
-                [] => String::new(),
-                names => format!(
-                    "; did you mean {}?",
-                    names
-                        .iter()
-                        .map(|n| format!("`{n}`"))
-                        .collect::<Vec<_>>()
-                        .join(" or ")
-                ),
-            };
-            return Err(Failure::at(
-                path,
-                format!("no topic `{topic}` in this log{hint}"),
-            ));
-        }
+    match topics.iter().find(|t| schema.get(t).is_none()) {
+        Some(topic) => Err(Failure::at(
+            path,
+            format!(
+                "no topic `{topic}` in this log{}",
+                did_you_mean(&schema.suggest(topic))
+            ),
+        )),
+        None => Ok(()),
     }
-    Ok(())
+}
+
+/// `; did you mean `a` or `b`?`, or nothing when there is no suggestion.
+pub(crate) fn did_you_mean(names: &[String]) -> String {
+    if names.is_empty() {
+        return String::new();
+    }
+    let names: Vec<String> = names.iter().map(|n| format!("`{n}`")).collect();
+    format!("; did you mean {}?", names.join(" or "))
 }
 
 /// Says on stderr what the export left out, so that nothing is skipped silently.

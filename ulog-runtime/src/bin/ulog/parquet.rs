@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
+use ulog_runtime::StreamReader;
 use ulog_runtime::columns::Window;
 use ulog_runtime::columns::parquet::{Converter, Layout, ParquetOptions};
 
@@ -62,6 +63,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     options
         .properties(Vec::new())
         .map_err(|e| Failure::exit(2, format!("--zstd-level {}: {e}", args.zstd_level)))?;
+    check_topics(&args.files, &args.messages)?;
     let total: u64 = args
         .files
         .iter()
@@ -89,7 +91,6 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         eprintln!();
     }
     let mut failed = 0;
-    let mut topics_seen = std::collections::HashSet::new();
     for (path, result) in args.files.iter().zip(&results) {
         match result {
             Ok(c) => {
@@ -110,7 +111,6 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
                     &args.messages,
                     c.files.is_empty().then_some("Parquet"),
                 );
-                topics_seen.extend(c.files.iter().map(|f| f.topic.clone()));
             }
             Err(e) => {
                 failed += 1;
@@ -118,16 +118,61 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
             }
         }
     }
-    for topic in &args.messages {
-        if !topics_seen.contains(topic) {
-            eprintln!("ulog: no log has rows of topic `{topic}`");
-        }
-    }
     if failed > 0 {
         return Err(Failure::exit(
             1,
             format!("{failed} of {} logs not converted", args.files.len()),
         ));
+    }
+    Ok(())
+}
+
+/// Before any conversion, from each log's definitions section: a `-m` topic that no log
+/// defines is an error (naming the closest topics), as for every verb; one that only some
+/// logs lack is said on stderr for each of them (a fleet's logs need not share topics).
+/// Logs that cannot be read are left to the conversion to report.
+fn check_topics(files: &[PathBuf], topics: &[String]) -> Result<(), Failure> {
+    if topics.is_empty() {
+        return Ok(());
+    }
+    let definitions: Vec<_> = files
+        .iter()
+        .filter_map(|path| {
+            let file = std::io::BufReader::new(std::fs::File::open(path).ok()?);
+            Some((path, StreamReader::read_definitions(file).ok()?))
+        })
+        .collect();
+    for topic in topics {
+        let lacking: Vec<_> = definitions
+            .iter()
+            .filter(|(_, meta)| meta.schema().get(topic).is_none())
+            .collect();
+        if lacking.is_empty() {
+            continue;
+        }
+        if lacking.len() == definitions.len() {
+            let mut names: Vec<String> = Vec::new();
+            for (_, meta) in &definitions {
+                for name in meta.schema().suggest(topic) {
+                    if !names.contains(&name) {
+                        names.push(name);
+                    }
+                }
+            }
+            let whose = if definitions.len() == 1 {
+                "in this log"
+            } else {
+                "in any of the logs"
+            };
+            let message = format!("no topic `{topic}` {whose}{}", crate::did_you_mean(&names));
+            return Err(match definitions.as_slice() {
+                [(path, _)] => Failure::at(path, message),
+                _ => Failure::exit(1, message),
+            });
+        }
+        for (path, _) in lacking {
+            eprintln!("ulog: {}: no topic `{topic}` in this log", path.display());
+        }
     }
     Ok(())
 }

@@ -720,3 +720,39 @@ fn helpers_pyulog_users_look_for() {
         .collect();
     assert_eq!(topics, ["t#0 1 rows 20..20", "t#1 2 rows 10..30"]);
 }
+
+#[test]
+fn read_definitions_stops_at_the_data_section() {
+    let mut f = File::v1(0);
+    f.format("t:uint64_t timestamp;int16_t v;uint8_t[2] _padding0;");
+    f.info("char[3] sys_name", b"PX4");
+    f.msg(Message::Parameter(KeyValue {
+        key: b"int32_t SYS_AUTOSTART",
+        value: &4001i32.to_le_bytes(),
+    }));
+    f.subscribe(0, 1, "t");
+    f.data(1, &row(10, 7));
+    f.msg(Message::Parameter(KeyValue {
+        key: b"int32_t SYS_AUTOSTART",
+        value: &4002i32.to_le_bytes(),
+    }));
+    // Whatever follows is not read: not even bytes that are not a message.
+    f.0.extend_from_slice(&[0xff; 64]);
+    let meta = StreamReader::read_definitions(&f.0[..]).unwrap();
+    assert!(meta.schema().get("t").is_some());
+    assert_eq!(
+        meta.info_value("sys_name").and_then(Value::as_str),
+        Some("PX4")
+    );
+    assert_eq!(
+        meta.parameter("SYS_AUTOSTART"),
+        Some(ParamValue::Int32(4001))
+    );
+    assert_eq!(meta.subscriptions().len(), 1, "stops at the first `A`");
+    // A log that is only definitions, and bytes that are not a log.
+    let mut only = File::v1(0);
+    only.format("t:uint64_t timestamp;");
+    let meta = StreamReader::read_definitions(&only.0[..]).unwrap();
+    assert_eq!(meta.schema().formats().len(), 1);
+    assert!(StreamReader::read_definitions(&b"not a log at all"[..]).is_err());
+}
