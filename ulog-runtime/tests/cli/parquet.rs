@@ -309,25 +309,13 @@ fn parquet_options_select_topics_and_time_and_say_what_they_wrote() {
     // Among several logs, one lacking a topic is said and the others convert; a topic no
     // log has is an error.
     let other = dir.join("only_battery.ulg");
-    {
-        use ulog_runtime::{ULog, Writer, WriterOptions};
-        #[derive(ULog)]
-        struct Battery {
-            timestamp: u64,
-            voltage_v: f32,
-        }
-        let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
-        let battery = w.topic::<Battery>(0).unwrap();
-        w.write(
-            &battery,
-            &Battery {
-                timestamp: 5,
-                voltage_v: 12.5,
-            },
-        )
+    let mut w = ulog_runtime::Writer::new(Vec::new(), Default::default()).unwrap();
+    w.format("battery:uint64_t timestamp;float voltage_v;")
         .unwrap();
-        std::fs::write(&other, w.into_inner()).unwrap();
-    }
+    let id = w.subscribe("battery", 0).unwrap();
+    w.data(id, &[5, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0x48, 0x41])
+        .unwrap();
+    std::fs::write(&other, w.into_inner()).unwrap();
     let both = [log.to_str().unwrap(), other.to_str().unwrap()];
     let run = ulog(&[
         "parquet",
