@@ -470,6 +470,11 @@ impl Metadata {
         &self.default_parameters
     }
 
+    /// Whether a message of the data section has been read.
+    pub(crate) fn in_data_section(&self) -> bool {
+        self.in_data_section
+    }
+
     /// Subscriptions, in file order (including ones that never get data).
     pub fn subscriptions(&self) -> &[Subscription] {
         &self.subscriptions

@@ -104,10 +104,14 @@ impl<R: Read> StreamReader<R> {
         })
     }
 
-    /// Reads a log's header and definitions section and stops after the first message of
-    /// the data section (the metadata holds it, e.g. a first subscription): the formats, info, multi info and initial parameters, without reading
-    /// the rows (a few kilobytes of a file of any size). What a tool checks before a pass,
-    /// e.g. that the topics a user asked for are there.
+    /// Reads a log's header and definitions section, without the rows: the formats, info,
+    /// multi info and initial parameters (PX4's definitions are tens to hundreds of
+    /// kilobytes, mostly parameters, whatever the log's size). It stops after the first
+    /// message of the data section (a subscription, row, logged string, dropout, parameter
+    /// change...), which it has read: a first subscription is in the metadata. What a tool
+    /// checks before a pass, e.g. that the topics a user asked for are there. A format
+    /// defined after the data began (PX4 never writes one; the whole-file reader takes it)
+    /// is not seen.
     ///
     /// ```no_run
     /// # fn main() -> Result<(), ulog_runtime::ReadError> {
@@ -119,7 +123,11 @@ impl<R: Read> StreamReader<R> {
     /// ```
     pub fn read_definitions(input: R) -> Result<Metadata, ReadError> {
         let mut reader = StreamReader::new(input)?;
-        while let Some(Event::Definition { .. } | Event::Diagnostic(_)) = reader.next_event()? {}
+        while !reader.walker.meta.in_data_section() {
+            if reader.next_event()?.is_none() {
+                break;
+            }
+        }
         Ok(reader.walker.meta)
     }
 

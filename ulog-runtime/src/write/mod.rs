@@ -251,8 +251,11 @@ impl<W: Write> Writer<W> {
     }
 
     /// Writes the subscriptions still waiting (see [`Writer`]) and flushes the output.
+    /// Without any, the definitions stay open.
     pub fn flush(&mut self) -> Result<(), WriteError> {
-        self.begin_data()?;
+        if !self.pending.is_empty() {
+            self.begin_data()?;
+        }
         Ok(self.out().flush()?)
     }
 
@@ -350,13 +353,15 @@ impl<W: Write> Writer<W> {
     /// after (a change begins the data section, see [`Writer`]).
     pub fn parameter(&mut self, name: &str, value: ParamValue) -> Result<(), WriteError> {
         let (key_text, bytes) = param_key_value(name, value)?;
-        if !self.pending.is_empty() {
-            self.begin_data()?;
-        }
-        self.put(Message::Parameter(KeyValue {
+        let m = Message::Parameter(KeyValue {
             key: key_text.as_bytes(),
             value: &bytes,
-        }))
+        });
+        if self.pending.is_empty() {
+            self.put(m)
+        } else {
+            self.put_in_data(m)
+        }
     }
 
     /// Writes a default parameter (`Q`); `default_types` bit 0: system default, bit 1: default

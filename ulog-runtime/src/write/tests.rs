@@ -283,6 +283,8 @@ fn sync_and_dropout_wait_for_the_data_section_and_refusals_write_nothing() {
         Err(WriteError::NoDataSection("a dropout"))
     ));
     assert_eq!(w.get_ref().len(), before);
+    // A flush with no subscription waiting leaves the definitions open.
+    w.flush().unwrap();
     // A parameter is still an initial one.
     w.parameter("P", ParamValue::Int32(1)).unwrap();
     let sub = w.subscribe("t", 0).unwrap();
@@ -291,6 +293,17 @@ fn sync_and_dropout_wait_for_the_data_section_and_refusals_write_nothing() {
     let before = w.get_ref().len();
     assert!(w.log(b'6', 0, &"x".repeat(70_000)).is_err());
     assert_eq!(w.get_ref().len(), before, "nothing written");
+    // So is a parameter change whose name is too long for its message.
+    let e = w
+        .parameter(&"P".repeat(300), ParamValue::Int32(2))
+        .unwrap_err();
+    assert!(
+        matches!(e, WriteError::TooLarge(MessageTooLarge { what: "key", .. })),
+        "{e}"
+    );
+    assert_eq!(w.get_ref().len(), before, "nothing written");
+    // The definitions are still open: a format can still be written.
+    w.format("late:uint64_t timestamp;").unwrap();
     w.sync().unwrap();
     w.dropout(5).unwrap();
     w.data(sub, &7u64.to_le_bytes()).unwrap();

@@ -291,14 +291,13 @@ fn parquet_options_select_topics_and_time_and_say_what_they_wrote() {
     );
     // A topic the log lacks is an error before anything is written, naming the closest.
     let fresh = dir.join("fresh");
-    let run = ulog(&[
-        "parquet",
-        log.to_str().unwrap(),
-        "-o",
-        fresh.to_str().unwrap(),
-        "-m",
-        "batery",
-    ]);
+    let only = |logs: &[&str], topic: &str| {
+        let mut args = vec!["parquet"];
+        args.extend(logs);
+        args.extend(["-o", fresh.to_str().unwrap(), "-m", topic]);
+        ulog(&args)
+    };
+    let run = only(&[log.to_str().unwrap()], "batery");
     assert_eq!(run.status.code(), Some(1));
     let err = String::from_utf8_lossy(&run.stderr);
     assert!(
@@ -317,15 +316,7 @@ fn parquet_options_select_topics_and_time_and_say_what_they_wrote() {
         .unwrap();
     std::fs::write(&other, w.into_inner()).unwrap();
     let both = [log.to_str().unwrap(), other.to_str().unwrap()];
-    let run = ulog(&[
-        "parquet",
-        both[0],
-        both[1],
-        "-o",
-        fresh.to_str().unwrap(),
-        "-m",
-        "gps",
-    ]);
+    let run = only(&both, "gps");
     let err = String::from_utf8_lossy(&run.stderr);
     assert!(run.status.success(), "{err}");
     assert!(
@@ -334,15 +325,21 @@ fn parquet_options_select_topics_and_time_and_say_what_they_wrote() {
     );
     assert!(!err.contains("small.ulg: no topic"), "{err}");
     assert!(fresh.join("small/gps_0.parquet").exists());
+    // A topic the logs define but none has rows of (here: in the window) is said too.
     let run = ulog(&[
         "parquet",
         both[0],
-        both[1],
         "-o",
         fresh.to_str().unwrap(),
         "-m",
-        "gsp",
+        "gps",
+        "--start",
+        "100",
     ]);
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{err}");
+    assert!(err.contains("no log has rows of topic `gps`"), "{err}");
+    let run = only(&both, "gsp");
     assert_eq!(run.status.code(), Some(1));
     let err = String::from_utf8_lossy(&run.stderr);
     assert!(

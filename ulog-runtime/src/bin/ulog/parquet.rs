@@ -91,6 +91,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         eprintln!();
     }
     let mut failed = 0;
+    let mut topics_seen = std::collections::HashSet::new();
     for (path, result) in args.files.iter().zip(&results) {
         match result {
             Ok(c) => {
@@ -111,12 +112,17 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
                     &args.messages,
                     c.files.is_empty().then_some("Parquet"),
                 );
+                topics_seen.extend(c.files.iter().map(|f| f.topic.clone()));
             }
             Err(e) => {
                 failed += 1;
                 eprintln!("ulog: {e}");
             }
         }
+    }
+    // Topics some log defines but none has rows of (in the window).
+    for topic in args.messages.iter().filter(|t| !topics_seen.contains(*t)) {
+        eprintln!("ulog: no log has rows of topic `{topic}`");
     }
     if failed > 0 {
         return Err(Failure::exit(
@@ -159,15 +165,14 @@ fn check_topics(files: &[PathBuf], topics: &[String]) -> Result<(), Failure> {
                     }
                 }
             }
-            let whose = if definitions.len() == 1 {
-                "in this log"
-            } else {
-                "in any of the logs"
-            };
-            let message = format!("no topic `{topic}` {whose}{}", crate::did_you_mean(&names));
-            return Err(match definitions.as_slice() {
-                [(path, _)] => Failure::at(path, message),
-                _ => Failure::exit(1, message),
+            let hint = crate::did_you_mean(&names);
+            return Err(match files {
+                [path] => Failure::at(path, format!("no topic `{topic}` in this log{hint}")),
+                _ if definitions.len() < files.len() => Failure::exit(
+                    1,
+                    format!("no topic `{topic}` in any of the logs that can be read{hint}"),
+                ),
+                _ => Failure::exit(1, format!("no topic `{topic}` in any of the logs{hint}")),
             });
         }
         for (path, _) in lacking {

@@ -730,16 +730,20 @@ fn read_definitions_stops_at_the_data_section() {
         key: b"int32_t SYS_AUTOSTART",
         value: &4001i32.to_le_bytes(),
     }));
+    // A sync message may come before the data section: reading goes on past it.
+    f.msg(Message::Sync);
+    f.format("u:uint64_t timestamp;");
     f.subscribe(0, 1, "t");
     f.data(1, &row(10, 7));
-    f.msg(Message::Parameter(KeyValue {
-        key: b"int32_t SYS_AUTOSTART",
-        value: &4002i32.to_le_bytes(),
-    }));
-    // Whatever follows is not read: not even bytes that are not a message.
+    // What follows is not read: another subscription, and bytes that are not a message.
+    f.subscribe(0, 2, "u");
     f.0.extend_from_slice(&[0xff; 64]);
     let meta = StreamReader::read_definitions(&f.0[..]).unwrap();
     assert!(meta.schema().get("t").is_some());
+    assert!(
+        meta.schema().get("u").is_some(),
+        "formats after a sync are read"
+    );
     assert_eq!(
         meta.info_value("sys_name").and_then(Value::as_str),
         Some("PX4")
@@ -748,7 +752,19 @@ fn read_definitions_stops_at_the_data_section() {
         meta.parameter("SYS_AUTOSTART"),
         Some(ParamValue::Int32(4001))
     );
-    assert_eq!(meta.subscriptions().len(), 1, "stops at the first `A`");
+    let names: Vec<&str> = meta
+        .subscriptions()
+        .iter()
+        .map(|s| s.name.as_str())
+        .collect();
+    assert_eq!(names, ["t"], "stops at the first `A`");
+    // A log whose first data message is a row of no subscription stops there too.
+    let mut orphan = File::v1(0);
+    orphan.format("t:uint64_t timestamp;int16_t v;uint8_t[2] _padding0;");
+    orphan.data(1, &row(10, 7));
+    orphan.subscribe(0, 1, "t");
+    let meta = StreamReader::read_definitions(&orphan.0[..]).unwrap();
+    assert!(meta.subscriptions().is_empty());
     // A log that is only definitions, and bytes that are not a log.
     let mut only = File::v1(0);
     only.format("t:uint64_t timestamp;");
