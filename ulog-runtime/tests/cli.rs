@@ -539,6 +539,23 @@ fn errors_are_one_line_with_the_file_and_offset() {
     );
     let m = missing.to_str().unwrap();
     assert_eq!(err(&["messages", m]), format!("ulog: {m}: no such file\n"));
+    // The same for every verb that takes paths: parquet per log, folders of `.msg` files.
+    let o = dir.join("pq");
+    assert_eq!(
+        err(&["parquet", m, d, "-o", o.to_str().unwrap()]),
+        format!(
+            "ulog: {m}: no such file\nulog: {d}: is a folder, not a log file\n\
+             ulog: 2 of 2 logs not converted\n"
+        )
+    );
+    assert_eq!(
+        err(&["check-msg", m, m]),
+        format!("ulog: {m}: no such folder\n")
+    );
+    assert_eq!(
+        err(&["codegen", "--msg-dir", m]),
+        format!("ulog: {m}: no such folder\n")
+    );
     // A topic the log lacks is an error for every verb that takes `-m`, with suggestions.
     let log = snapshot_log(&dir);
     let l = log.to_str().unwrap();
@@ -549,6 +566,13 @@ fn errors_are_one_line_with_the_file_and_offset() {
             "{verb}"
         );
     }
+    // A name close to none says where the topics are listed.
+    assert_eq!(
+        err(&["csv", l, "-m", "zzzzzzzzzzzz"]),
+        format!(
+            "ulog: {l}: no topic `zzzzzzzzzzzz` in this log (`ulog info FILE` lists its topics)\n"
+        )
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -372,7 +372,7 @@ fn a_log_that_cannot_be_read_is_reported_and_the_others_converted() {
         "{err}"
     );
     assert!(
-        err.contains(&format!("ulog: {}: I/O error", missing.display())),
+        err.contains(&format!("ulog: {}: no such file\n", missing.display())),
         "{err}"
     );
     assert!(err.contains("ulog: 2 of 3 logs not converted"), "{err}");

@@ -24,6 +24,7 @@ pub(crate) struct Args {
 /// `N/M formats identical`; exit 0 only when all M formats the folder defines are identical
 /// and M > 0, else 1.
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
+    crate::check_path(&args.dir, true)?;
     let set = MsgSet::read_dir(&args.dir).map_err(|e| Failure::from(e.to_string()))?;
     let log = crate::open(&args.file)?;
     let check = set.check(log.metadata().schema());

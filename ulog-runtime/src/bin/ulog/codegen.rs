@@ -54,6 +54,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         }
     }
     for dir in &args.msg_dir {
+        crate::check_path(dir, true)?;
         if topics.is_empty() {
             builder.msg_dir(dir);
         } else {

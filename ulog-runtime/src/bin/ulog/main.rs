@@ -84,6 +84,14 @@ impl<E: std::fmt::Display + 'static> From<E> for Failure {
 }
 
 impl Failure {
+    /// `FILE: message`, or the message: what `ulog: ` is followed by on stderr.
+    pub(crate) fn text(&self) -> String {
+        match &self.path {
+            Some(path) => format!("{}: {}", path.display(), self.message),
+            None => self.message.clone(),
+        }
+    }
+
     /// A failure about one file.
     pub(crate) fn at(path: &Path, message: impl std::fmt::Display) -> Failure {
         Failure {
@@ -122,17 +130,9 @@ fn main() -> ExitCode {
         Err(Failure {
             broken_pipe: true, ..
         }) => ExitCode::SUCCESS,
-        Err(Failure {
-            path,
-            message,
-            code,
-            ..
-        }) => {
-            match path {
-                Some(path) => eprintln!("ulog: {}: {message}", path.display()),
-                None => eprintln!("ulog: {message}"),
-            }
-            ExitCode::from(code)
+        Err(failure) => {
+            eprintln!("ulog: {}", failure.text());
+            ExitCode::from(failure.code)
         }
     }
 }
@@ -154,21 +154,32 @@ fn run(command: Command, out: &mut impl Write) -> Result<(), Failure> {
 
 /// Opens a log, with plain messages for paths that are not readable files.
 pub(crate) fn open(path: &Path) -> Result<Log<'static>, Failure> {
-    let plain = |e: &io::Error| match e.kind() {
+    check_path(path, false)?;
+    Log::open(path).map_err(|e| match e {
+        ulog_runtime::ReadError::Io(io) => Failure::at(path, plain_io(&io, false)),
+        other => Failure::at(path, other),
+    })
+}
+
+/// A plain message when `path` is not what a verb needs: a file (`folder` false) or a
+/// folder (`folder` true).
+pub(crate) fn check_path(path: &Path, folder: bool) -> Result<(), Failure> {
+    match std::fs::metadata(path) {
+        Err(e) => Err(Failure::at(path, plain_io(&e, folder))),
+        Ok(m) if folder && !m.is_dir() => Err(Failure::at(path, "is not a folder")),
+        Ok(m) if !folder && m.is_dir() => Err(Failure::at(path, "is a folder, not a log file")),
+        Ok(m) if !folder && !m.is_file() => Err(Failure::at(path, "is not a regular file")),
+        Ok(_) => Ok(()),
+    }
+}
+
+fn plain_io(e: &io::Error, folder: bool) -> String {
+    match e.kind() {
+        io::ErrorKind::NotFound if folder => "no such folder".to_owned(),
         io::ErrorKind::NotFound => "no such file".to_owned(),
         io::ErrorKind::PermissionDenied => "permission denied".to_owned(),
         _ => e.to_string(),
-    };
-    match std::fs::metadata(path) {
-        Err(e) => return Err(Failure::at(path, plain(&e))),
-        Ok(m) if m.is_dir() => return Err(Failure::at(path, "is a folder, not a log file")),
-        Ok(m) if !m.is_file() => return Err(Failure::at(path, "is not a regular file")),
-        Ok(_) => {}
     }
-    Log::open(path).map_err(|e| match e {
-        ulog_runtime::ReadError::Io(io) => Failure::at(path, plain(&io)),
-        other => Failure::at(path, other),
-    })
 }
 
 /// Prints what pyulog prints while it reads (its warnings), as the verbs that mirror a
@@ -209,10 +220,10 @@ pub(crate) fn check_topics(log: &Log<'_>, path: &Path, topics: &[String]) -> Res
     }
 }
 
-/// `; did you mean `a` or `b`?`, or nothing when there is no suggestion.
+/// `; did you mean `a` or `b`?`, or where to see the topics when no name is close.
 pub(crate) fn did_you_mean(names: &[String]) -> String {
     if names.is_empty() {
-        return String::new();
+        return " (`ulog info FILE` lists its topics)".to_owned();
     }
     let names: Vec<String> = names.iter().map(|n| format!("`{n}`")).collect();
     format!("; did you mean {}?", names.join(" or "))

@@ -116,7 +116,10 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
             }
             Err(e) => {
                 failed += 1;
-                eprintln!("ulog: {e}");
+                match crate::check_path(path, false) {
+                    Err(plain) => eprintln!("ulog: {}", plain.text()),
+                    Ok(()) => eprintln!("ulog: {e}"),
+                }
             }
         }
     }
