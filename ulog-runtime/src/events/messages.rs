@@ -1,21 +1,4 @@
 //! What pyulog 1.3.0's `ulog_messages` prints for a log, line for line:
-//!
-//! 1. the warnings pyulog prints while it reads the file (a file version above 1,
-//!    `Warning: no subscription found for message id N. Continuing, but file is most likely
-//!    corrupt` once per `msg_id` no subscription declares), and `Failed to get event parser: ...` when a PX4 log has events but no
-//!    usable metadata;
-//! 2. the messages, `h:mm:ss.mmm LEVEL: text`. For a log whose `sys_name` is `PX4`: its
-//!    events of internal level below 8 in the `default` group (an id the metadata lacks as
-//!    `[Unknown event with ID N]`), then its logged strings except those ending in a tab
-//!    (PX4 logs those beside an event that says the same), sorted by time, events first at
-//!    equal times. For other logs: the logged strings in file order.
-//!
-//! Where pyulog stops listing events (an event whose message cannot be formatted, or whose
-//! argument type the metadata lacks, ends the list there), so does this, and
-//! [`Messages::notes`] says why. Two differences, both for what pyulog cannot show: tagged
-//! strings (`C` messages) are listed with the logged ones as `[tag N] text` (pyulog leaves
-//! them out), and an event whose arguments are cut short ends the list with a note (pyulog
-//! stops with a Python error).
 
 use super::{EventError, decode};
 use crate::Value;
@@ -80,7 +63,7 @@ impl MessageLine {
     }
 }
 
-/// What `ulog_messages` prints ([module docs](self)).
+/// What `ulog_messages` prints: see [`messages`].
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Messages {
     /// Lines pyulog prints before the messages (its warnings while reading).
@@ -103,7 +86,26 @@ fn level_name(m: &LoggedMessage) -> &'static str {
     }
 }
 
-/// The lines of pyulog's `ulog_messages` for `log` ([module docs](self)).
+/// The lines of pyulog's `ulog_messages` for `log`.
+///
+/// What pyulog 1.3.0's `ulog_messages` prints for a log, line for line:
+///
+/// 1. the warnings pyulog prints while it reads the file (a file version above 1,
+///    `Warning: no subscription found for message id N. Continuing, but file is most likely
+///    corrupt` once per `msg_id` no subscription declares), and `Failed to get event parser: ...` when a PX4 log has events but no
+///    usable metadata;
+/// 2. the messages, `h:mm:ss.mmm LEVEL: text`. For a log whose `sys_name` is `PX4`: its
+///    events of internal level below 8 in the `default` group (an id the metadata lacks as
+///    `[Unknown event with ID N]`), then its logged strings except those ending in a tab
+///    (PX4 logs those beside an event that says the same), sorted by time, events first at
+///    equal times. For other logs: the logged strings in file order.
+///
+/// Where pyulog stops listing events (an event whose message cannot be formatted, or whose
+/// argument type the metadata lacks, ends the list there), so does this, and
+/// [`Messages::notes`] says why. Two differences, both for what pyulog cannot show: tagged
+/// strings (`C` messages) are listed with the logged ones as `[tag N] text` (pyulog leaves
+/// them out), and an event whose arguments are cut short ends the list with a note (pyulog
+/// stops with a Python error).
 pub fn messages(log: &Log<'_>) -> Messages {
     let mut out = Messages {
         warnings: crate::tools::pyulog_warnings(log),

@@ -7,7 +7,7 @@
 //! - [`EventRow`]: an `event` row as it is logged, read through an [`EventLayout`] found from
 //!   the log's own format (available whatever the metadata).
 //! - [`decode`]: a row with the definitions: name, namespace, group, typed arguments, the
-//!   message and description as libevents formats them ([`format`]).
+//!   message and description as libevents formats them ([`format`](mod@format)).
 //! - [`Log::events`]: all of a log's events at once; [`messages`]: the lines of pyulog's
 //!   `ulog_messages`, logged strings and events merged.
 //!

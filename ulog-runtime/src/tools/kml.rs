@@ -1,12 +1,5 @@
 //! `ulog2kml`: the GPS track of a log as KML, one line per stretch of one flight mode, as
 //! pyulog 1.3.0 makes it and simplekml writes it.
-//!
-//! The track is instance 0 of the position topic (`vehicle_gnss`, or `vehicle_gps_position`
-//! in older logs, unless one is named): `lon`, `lat`, `alt` under whichever names the topic
-//! uses (`longitude_deg`, `receiver.longitude`...), rows with `fix_type` above 2 only,
-//! `int32_t` degrees × 1e7 and millimetres scaled; a point at most every 0.1 s. A new line
-//! starts at each change of `vehicle_status.nav_state` (and at the end of the log), colored
-//! by the flight mode; camera trigger placemarks (`--camera-trigger TOPIC`) follow.
 
 use crate::Log;
 use crate::columns::{ColumnValues, Columns};
@@ -59,7 +52,17 @@ pub enum KmlError {
     },
 }
 
-/// The KML document `ulog2kml` writes for `log` ([module docs](self)).
+/// The KML document `ulog2kml` writes for `log`.
+///
+/// `ulog2kml`: the GPS track of a log as KML, one line per stretch of one flight mode, as
+/// pyulog 1.3.0 makes it and simplekml writes it.
+///
+/// The track is instance 0 of the position topic (`vehicle_gnss`, or `vehicle_gps_position`
+/// in older logs, unless one is named): `lon`, `lat`, `alt` under whichever names the topic
+/// uses (`longitude_deg`, `receiver.longitude`...), rows with `fix_type` above 2 only,
+/// `int32_t` degrees × 1e7 and millimetres scaled; a point at most every 0.1 s. A new line
+/// starts at each change of `vehicle_status.nav_state` (and at the end of the log), colored
+/// by the flight mode; camera trigger placemarks (`--camera-trigger TOPIC`) follow.
 pub fn kml(log: &Log<'_>, options: &KmlOptions) -> Result<String, KmlError> {
     let topic = match &options.topic {
         Some(t) => t.clone(),
