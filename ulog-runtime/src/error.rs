@@ -151,14 +151,6 @@ pub enum DiagnosticKind {
     /// A message too short for its type.
     #[error("{0}")]
     Malformed(MalformedMessage),
-    /// Text (a name, key or format) that is not UTF-8.
-    #[error("{what} is not valid UTF-8: {text:?}")]
-    InvalidUtf8 {
-        /// What the text is.
-        what: &'static str,
-        /// The text, lossily decoded.
-        text: String,
-    },
     /// A format definition that does not follow the grammar.
     #[error("invalid format definition `{text}`: {error}")]
     InvalidFormat {
@@ -177,6 +169,8 @@ pub enum DiagnosticKind {
         text: String,
         /// What is outside the grammar.
         notes: String,
+        /// Whether the definition is not UTF-8 (its invalid bytes left out).
+        not_utf8: bool,
     },
     /// An `I`/`M`/`P`/`Q` key or value that does not follow the format, kept as far as it
     /// goes (see [`Info`](crate::read::Info)).

@@ -50,7 +50,7 @@ impl Default for CsvOptions {
 }
 
 /// Writes the rows of one topic instance (its subscriptions, as [`Log::instances`] gives
-/// them) as ulog2csv does; returns the rows written. `progress` is called once per row read.
+/// them) as ulog2csv does; returns the rows written.
 pub fn write_csv(
     log: &Log<'_>,
     instance: &[&Subscription],
@@ -76,6 +76,16 @@ fn write_csv_with(
     let cols = spec.columns();
     let header: Vec<&str> = cols.iter().map(|c| c.name.as_str()).collect();
     writeln!(out, "{}", header.join(&options.delimiter))?;
+    // Each field as the file has it (the timestamp too, as ulog2csv shows it), found once.
+    let file_types: Vec<Option<Primitive>> = cols
+        .iter()
+        .map(|c| match c.kind {
+            ColumnKind::Text { .. } => None,
+            ColumnKind::Value(_) => {
+                Some(Primitive::from_c_name(&c.ulog_type).expect("a basic type"))
+            }
+        })
+        .collect();
     let mut line = String::new();
     let mut count = 0;
     let mut started = false;
@@ -87,22 +97,21 @@ fn write_csv_with(
             Admit::Take => started = true,
         }
         line.clear();
-        for (k, c) in cols.iter().enumerate() {
+        for (k, (c, file_type)) in cols.iter().zip(&file_types).enumerate() {
             if k > 0 {
                 line.push_str(&options.delimiter);
             }
-            // The field as the file has it (the timestamp too, as ulog2csv shows it).
-            match c.kind {
-                ColumnKind::Text { len } => {
+            match (c.kind, file_type) {
+                (ColumnKind::Text { len }, _) => {
                     let end = (c.offset + len).min(row.data.len());
                     line.push_str(&text(row.data.get(c.offset..end).unwrap_or_default()));
                 }
-                ColumnKind::Value(_) => {
-                    let p = Primitive::from_c_name(&c.ulog_type).expect("a basic type");
+                (_, Some(p)) => {
                     if let Some(b) = row.data.get(c.offset..c.offset + p.size()) {
-                        write_number(&mut line, p, b);
+                        write_number(&mut line, *p, b);
                     }
                 }
+                (_, None) => {}
             }
         }
         line.push('\n');

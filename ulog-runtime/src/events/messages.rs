@@ -72,8 +72,6 @@ pub struct Messages {
     pub lines: Vec<MessageLine>,
     /// What was left out and why, for a note on stderr (pyulog says nothing).
     pub notes: Vec<String>,
-    /// Logged strings whose text was not valid UTF-8 (pyulog fails on them without `-i`).
-    pub invalid_utf8: Vec<u64>,
 }
 
 /// A logged string's level name as pyulog gives it: ASCII `'0'..'7'` only.
@@ -112,19 +110,14 @@ pub fn messages(log: &Log<'_>) -> Messages {
         ..Messages::default()
     };
     let meta = log.metadata();
-    let strings = log.logged_messages().iter().map(|m| {
-        if !m.valid_utf8 {
-            out.invalid_utf8.push(m.offset);
-        }
-        MessageLine {
-            timestamp: m.timestamp,
-            level: level_name(m),
-            text: m.text.clone(),
-            kind: match m.tag {
-                Some(t) => MessageKind::Tagged(t),
-                None => MessageKind::Logged,
-            },
-        }
+    let strings = log.logged_messages().iter().map(|m| MessageLine {
+        timestamp: m.timestamp,
+        level: level_name(m),
+        text: m.text.clone(),
+        kind: match m.tag {
+            Some(t) => MessageKind::Tagged(t),
+            None => MessageKind::Logged,
+        },
     });
     let strings: Vec<MessageLine> = strings.collect();
     let px4 = matches!(meta.info_value("sys_name"), Some(Value::String(s)) if s == "PX4");

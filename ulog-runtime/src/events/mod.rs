@@ -296,21 +296,20 @@ impl Log<'_> {
     /// The log's events: every `event` row of instance 0 in file order, and the embedded
     /// metadata to decode them with ([`decode`]).
     pub fn events(&self) -> Events {
-        let mut rows = Vec::new();
-        let mut layout_error = None;
-        let schema = self.metadata().schema();
-        for sub in self
-            .subscriptions()
-            .iter()
-            .filter(|s| s.name == TOPIC && s.multi_id == 0)
-        {
-            let Some(id) = sub.format() else { continue };
-            match EventLayout::of(schema, id) {
-                Ok(layout) => rows.extend(self.rows(sub).filter_map(|r| layout.read(&r))),
-                Err(e) => layout_error = Some(e),
-            }
-        }
-        rows.sort_by_key(|r| r.offset);
+        // The subscriptions of a topic share its one format, so one layout reads them all.
+        let subs = self.instance(TOPIC, 0);
+        let (rows, layout_error) = match subs.first().and_then(|s| s.format()) {
+            None => (Vec::new(), None),
+            Some(id) => match EventLayout::of(self.metadata().schema(), id) {
+                Ok(layout) => (
+                    self.instance_rows(&subs)
+                        .filter_map(|r| layout.read(&r))
+                        .collect(),
+                    None,
+                ),
+                Err(e) => (Vec::new(), Some(e)),
+            },
+        };
         Events {
             rows,
             metadata: EventsMetadata::of(self.metadata()),

@@ -115,6 +115,9 @@ pub struct ParameterChange {
     pub value: ParamValue,
     /// File offset of the message.
     pub offset: u64,
+    /// Whether the name was valid UTF-8 (else its invalid bytes are left out, as pyulog
+    /// does; [`Log::not_utf8`](crate::Log::not_utf8) lists it).
+    pub valid_utf8: bool,
 }
 
 /// A `Q` message: a default value of a parameter.
@@ -532,6 +535,7 @@ impl Metadata {
                     diag(DiagnosticKind::OddFormat {
                         text,
                         notes: notes.join("; "),
+                        not_utf8: !valid,
                     })
                 }
             }
@@ -577,7 +581,7 @@ impl Metadata {
                 problem.map_or(Ok(Applied::Nothing), diag)
             }
             Message::Parameter(kv) => {
-                let (name, value) = match param_value(kv) {
+                let (name, value, problem) = match param_value(kv) {
                     Ok(x) => x,
                     Err(kind) => return diag(kind),
                 };
@@ -587,6 +591,10 @@ impl Metadata {
                         name,
                         value,
                         offset,
+                        valid_utf8: !matches!(
+                            problem,
+                            Some(DiagnosticKind::KeptValue { not_utf8: true, .. })
+                        ),
                     }));
                 }
                 // Logs hold thousands of parameters: found by name through an index.
@@ -598,13 +606,13 @@ impl Metadata {
                         self.initial_parameters.push(Parameter { name, value });
                     }
                 }
-                Ok(Applied::Nothing)
+                problem.map_or(Ok(Applied::Nothing), diag)
             }
             Message::DefaultParameter {
                 default_types,
                 entry,
             } => {
-                let (name, value) = match param_value(entry) {
+                let (name, value, _) = match param_value(entry) {
                     Ok(x) => x,
                     Err(kind) => return diag(kind),
                 };
@@ -726,14 +734,15 @@ impl Metadata {
             },
         }
         if let Some(previous) = self.by_msg_id[usize::from(msg_id)].checked_sub(1) {
-            if !self.resubscriptions.iter().any(|r| r.0 == msg_id) {
+            if !self.is_resubscribed(msg_id) {
+                // Its first subscription joins the list, and rows of this id now look up
+                // which subscription they follow.
                 let first = &self.subscriptions[previous as usize];
                 self.resubscriptions.push((msg_id, first.offset, previous));
+                self.resubscribed[usize::from(msg_id / 64)] |= 1 << (msg_id % 64);
             }
             self.resubscriptions
                 .push((msg_id, offset, self.subscriptions.len() as u32));
-            // Rows of this id now look up which subscription they follow.
-            self.resubscribed[usize::from(msg_id / 64)] |= 1 << (msg_id % 64);
             let previous = previous as usize;
             problem = Some(DiagnosticKind::DuplicateMsgId {
                 msg_id,
@@ -751,11 +760,17 @@ impl Metadata {
         })
     }
 
+    /// Whether `msg_id` has been subscribed more than once (it is in `resubscriptions`).
+    #[inline]
+    fn is_resubscribed(&self, msg_id: u16) -> bool {
+        self.resubscribed[usize::from(msg_id / 64)] & (1 << (msg_id % 64)) != 0
+    }
+
     /// The subscription a row of `msg_id` at file offset `offset` belongs to: the last one
     /// of that id before the row.
     #[inline]
     pub(crate) fn subscription_at(&self, msg_id: u16, offset: u64) -> Option<usize> {
-        if self.resubscribed[usize::from(msg_id / 64)] & (1 << (msg_id % 64)) == 0 {
+        if !self.is_resubscribed(msg_id) {
             return self.by_msg_id[usize::from(msg_id)]
                 .checked_sub(1)
                 .map(|i| i as usize);
@@ -948,7 +963,11 @@ fn basic(field: &Field) -> Option<(Primitive, Option<usize>)> {
     }
 }
 
-fn param_value(kv: KeyValue<'_>) -> Result<(String, ParamValue), DiagnosticKind> {
+/// A parameter's name and value, and what was odd about them (reported for initial
+/// parameters; a change says whether its name was UTF-8).
+fn param_value(
+    kv: KeyValue<'_>,
+) -> Result<(String, ParamValue, Option<DiagnosticKind>), DiagnosticKind> {
     let d = decode_key_value(kv);
     let value = match d.value {
         Value::Scalar(crate::value::Scalar::Int32(v)) => ParamValue::Int32(v),
@@ -960,7 +979,8 @@ fn param_value(kv: KeyValue<'_>) -> Result<(String, ParamValue), DiagnosticKind>
             });
         }
     };
-    Ok((d.name, value))
+    let problem = d.problem();
+    Ok((d.name, value, problem))
 }
 
 #[cfg(test)]

@@ -146,8 +146,8 @@ impl Skipped {
 }
 
 impl Log<'_> {
-    /// File offsets of the messages with text that is not UTF-8 (names, keys, formats,
-    /// info values, logged strings), whose invalid bytes the reader left out. pyulog's tools
+    /// File offsets of the messages with text that is not UTF-8 (formats, keys, info values,
+    /// parameter names, logged strings), whose invalid bytes the reader left out. pyulog's tools
     /// fail on such a log unless given `-i`; `ulog`'s verbs do the same.
     pub fn not_utf8(&self) -> Vec<u64> {
         use crate::DiagnosticKind as K;
@@ -157,7 +157,7 @@ impl Log<'_> {
             .filter(|d| {
                 matches!(
                     d.kind,
-                    K::InvalidUtf8 { .. } | K::KeptValue { not_utf8: true, .. }
+                    K::OddFormat { not_utf8: true, .. } | K::KeptValue { not_utf8: true, .. }
                 )
             })
             .map(|d| d.offset)
@@ -166,6 +166,12 @@ impl Log<'_> {
                     .iter()
                     .filter(|m| !m.valid_utf8)
                     .map(|m| m.offset),
+            )
+            .chain(
+                self.parameter_changes()
+                    .iter()
+                    .filter(|c| !c.valid_utf8)
+                    .map(|c| c.offset),
             )
             .collect();
         at.sort_unstable();

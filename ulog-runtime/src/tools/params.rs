@@ -113,11 +113,11 @@ pub fn params(
         }
     };
     params.sort_by(|a, b| a.0.cmp(&b.0));
-    let changes_of = |name: &str| -> Vec<_> {
-        log.parameter_changes()
-            .iter()
-            .filter(|c| c.name == name)
-            .collect()
+    let changed = log.changed_parameters();
+    let changes_of = |name: &str| -> &[&crate::read::ParameterChange] {
+        changed
+            .binary_search_by(|(n, _)| (*n).cmp(name))
+            .map_or(&[], |i| &changed[i].1)
     };
     match options.format {
         ParamsFormat::Csv => {
@@ -128,17 +128,15 @@ pub fn params(
                     continue;
                 }
                 write!(out, "{name}{d}{}", param_text(value))?;
+                if options.timestamps || !initial {
+                    for c in changes {
+                        write!(out, "{d}{}", param_text(c.value))?;
+                    }
+                }
                 if options.timestamps {
-                    for c in &changes {
-                        write!(out, "{d}{}", param_text(c.value))?;
-                    }
                     write!(out, "\ntimestamp{d}0")?;
-                    for c in &changes {
+                    for c in changes {
                         write!(out, "{d}{}", c.timestamp)?;
-                    }
-                } else if !initial {
-                    for c in &changes {
-                        write!(out, "{d}{}", param_text(c.value))?;
                     }
                 }
                 writeln!(out)?;

@@ -191,11 +191,9 @@ pub struct Writer<W: Write> {
     subscriptions: Vec<Option<Subscribed>>,
     next_msg_id: u32,
     default_parameters: bool,
-    /// Whether the data section has begun: formats can no longer be written.
+    /// Whether the data section has begun (the file has an `A`, `L` or `C`, or a row):
+    /// formats can no longer be written.
     data_section: bool,
-    /// Whether the file has a message that begins the data section for readers (`A`, `L`,
-    /// `C`).
-    data_marked: bool,
     /// Subscriptions made while the definitions were open, written when the data begins.
     pending: Vec<(SubscriptionId, u8)>,
     buf: Vec<u8>,
@@ -212,7 +210,6 @@ impl<W: Write> Writer<W> {
             next_msg_id: 0,
             default_parameters: options.default_parameters,
             data_section: false,
-            data_marked: false,
             pending: Vec::new(),
             buf: Vec::with_capacity(256),
             row: Vec::with_capacity(256),
@@ -277,7 +274,6 @@ impl<W: Write> Writer<W> {
     /// Ends the definitions section: the waiting subscriptions go out, in `msg_id` order.
     fn begin_data(&mut self) -> Result<(), WriteError> {
         self.data_section = true;
-        self.data_marked |= !self.pending.is_empty();
         for (id, multi_id) in std::mem::take(&mut self.pending) {
             let topic = self.subscriptions[usize::from(id.0)]
                 .as_ref()
@@ -414,7 +410,6 @@ impl<W: Write> Writer<W> {
                 msg_id,
                 name: format.as_bytes(),
             })?;
-            self.data_marked = true;
         } else {
             self.pending.push((SubscriptionId(msg_id), multi_id));
         }
@@ -563,9 +558,7 @@ impl<W: Write> Writer<W> {
             tag: None,
             timestamp,
             text: text.as_bytes(),
-        })?;
-        self.data_marked = true;
-        Ok(())
+        })
     }
 
     /// Writes a tagged logged string (`C`).
@@ -581,9 +574,7 @@ impl<W: Write> Writer<W> {
             tag: Some(tag),
             timestamp,
             text: text.as_bytes(),
-        })?;
-        self.data_marked = true;
-        Ok(())
+        })
     }
 
     /// Writes a sync message (`S`), which lets readers recover from corruption. It belongs
@@ -604,7 +595,7 @@ impl<W: Write> Writer<W> {
 
     /// Refuses a message that cannot begin the data section for readers before it has begun.
     fn data_section_for(&self, what: &'static str) -> Result<(), WriteError> {
-        if !self.data_marked && self.pending.is_empty() {
+        if !self.data_section && self.pending.is_empty() {
             return Err(WriteError::NoDataSection(what));
         }
         Ok(())
@@ -613,6 +604,13 @@ impl<W: Write> Writer<W> {
     /// Writes a message of the data section, beginning it if needed; a message that cannot
     /// be encoded is refused before anything is written.
     fn put_in_data(&mut self, m: Message<'_>) -> Result<(), WriteError> {
+        if self.pending.is_empty() {
+            // Refused (too large) before anything is written, and before the definitions
+            // close.
+            self.put(m)?;
+            self.data_section = true;
+            return Ok(());
+        }
         let mut bytes = Vec::new();
         m.encode(&mut bytes)?;
         self.begin_data()?;
@@ -760,7 +758,6 @@ impl Writer<std::fs::File> {
             next_msg_id,
             default_parameters: bits.has_default_parameters(),
             data_section: true,
-            data_marked: true,
             pending: Vec::new(),
             buf: Vec::with_capacity(256),
             row: Vec::with_capacity(256),

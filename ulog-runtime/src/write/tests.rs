@@ -283,8 +283,12 @@ fn sync_and_dropout_wait_for_the_data_section_and_refusals_write_nothing() {
         Err(WriteError::NoDataSection("a dropout"))
     ));
     assert_eq!(w.get_ref().len(), before);
-    // A flush with no subscription waiting leaves the definitions open.
+    // A flush with no subscription waiting leaves the definitions open, and so does a
+    // logged string refused as too long.
     w.flush().unwrap();
+    assert!(w.log(b'6', 0, &"x".repeat(70_000)).is_err());
+    assert_eq!(w.get_ref().len(), before);
+    w.format("early:uint64_t timestamp;").unwrap();
     // A parameter is still an initial one.
     w.parameter("P", ParamValue::Int32(1)).unwrap();
     let sub = w.subscribe("t", 0).unwrap();

@@ -97,13 +97,12 @@ impl Serialize for Rows<'_> {
         }
         let len = self.subs.iter().map(|sub| self.log.rows(sub).len()).sum();
         let mut seq = s.serialize_seq(Some(len))?;
-        for sub in &self.subs {
-            for r in self.log.rows(sub) {
-                seq.serialize_element(&Row {
-                    timestamp: r.timestamp,
-                    data: r.value(),
-                })?;
-            }
+        // In file order: a resubscribed instance's rows interleave as the file has them.
+        for r in self.log.instance_rows(&self.subs) {
+            seq.serialize_element(&Row {
+                timestamp: r.timestamp,
+                data: r.value(),
+            })?;
         }
         seq.end()
     }

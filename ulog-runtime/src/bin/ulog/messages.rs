@@ -14,8 +14,8 @@ use crate::Failure;
 pub(crate) struct Args {
     /// The log.
     file: PathBuf,
-    /// Drop bytes of logged strings that are not UTF-8 (pyulog's `-i`); without it such a
-    /// string is an error.
+    /// Drop bytes of text that are not UTF-8 (pyulog's `-i`); without it such text is an
+    /// error.
     #[arg(short, long)]
     ignore: bool,
     /// JSON Lines, one object per message with every field (pyulog's warnings go to stderr).
@@ -25,17 +25,8 @@ pub(crate) struct Args {
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     let log = crate::open(&args.file)?;
+    crate::check_utf8(&log, &args.file, args.ignore)?;
     let m = messages(&log);
-    if !args.ignore
-        && let Some(at) = m.invalid_utf8.first()
-    {
-        return Err(Failure::at(
-            &args.file,
-            format!(
-                "the logged string at byte {at} is not valid UTF-8 (-i leaves out the invalid bytes, as pyulog's -i does)"
-            ),
-        ));
-    }
     for note in &m.notes {
         eprintln!("ulog: {}: {note}", args.file.display());
     }

@@ -122,24 +122,30 @@ fn keys_and_format_names_outside_the_grammar_are_kept_whole() {
 #[test]
 fn names_that_are_not_utf8_keep_their_valid_part() {
     let mut f = File::v1(0);
-    f.msg(Message::Format(b"t\xffopic:uint64_t timestamp;uint8_t v;"));
+    let format_at = f.msg(Message::Format(b"t\xffopic:uint64_t timestamp;uint8_t v;"));
     f.msg(Message::Subscribe {
         multi_id: 0,
         msg_id: 0,
         name: b"t\xffopic",
     });
     f.data(0, &[1, 0, 0, 0, 0, 0, 0, 0, 9]);
-    f.msg(Message::Info(KeyValue {
+    let info_at = f.msg(Message::Info(KeyValue {
         key: b"char[2] k\xffey",
         value: b"o\xffk",
     }));
-    f.msg(Message::Logging {
+    let param_at = f.msg(Message::Parameter(KeyValue {
+        key: b"int32_t P\xffX",
+        value: &1i32.to_le_bytes(),
+    }));
+    let logged_at = f.msg(Message::Logging {
         level: b'6',
         tag: None,
         timestamp: 1,
         text: b"bad \xfe byte",
     });
     let log = Log::from_vec(f.0).unwrap();
+    // Every text that is not UTF-8 is found, as pyulog's tools fail on each without `-i`.
+    assert_eq!(log.not_utf8(), [format_at, info_at, param_at, logged_at]);
     // As pyulog reads them: the invalid bytes left out, the data kept.
     let sub = log.subscription("topic", 0).unwrap();
     assert_eq!(log.rows(sub).count(), 1);
