@@ -88,7 +88,7 @@ pub(crate) fn fallback(input: &Input<'_>) -> TokenStream {
             .fields
             .iter()
             .any(|f| f.attrs.padding.is_none() && f.ulog_name().0 == "timestamp");
-    let topic_impl = timestamp.then(|| quote! { impl #p::Topic for #ident {} });
+    let topic_impl = timestamp.then(|| quote! { impl #p::DerivedTopic for #ident {} });
     quote! {
         #[doc(hidden)]
         #[allow(non_upper_case_globals, unused_qualifications, dead_code, clippy::all, clippy::pedantic)]
@@ -115,15 +115,7 @@ pub(crate) fn fallback(input: &Input<'_>) -> TokenStream {
                 }
             }
 
-            impl #p::Element for #ident {
-                const KIND: #p::TypedKind = #p::nested_kind::<Self>();
-                fn encode_element(&self, _: &mut #p::Vec<u8>) {
-                    ::core::unreachable!("the derive failed")
-                }
-                fn decode_at(_: &#p::FieldPlan, _: &[u8], _: usize) -> Self {
-                    ::core::unreachable!("the derive failed")
-                }
-            }
+            impl #p::DerivedElement for #ident {}
 
             #topic_impl
         };
@@ -190,7 +182,7 @@ pub(crate) fn expand(input: &Input<'_>, topic: &str) -> TokenStream {
     }
 
     let topic_impl = (has_timestamp && input.attrs.nested.is_none())
-        .then(|| quote! { impl #p::Topic for #ident {} });
+        .then(|| quote! { impl #p::DerivedTopic for #ident {} });
     let too_large = format!(
         "`{rust_type}` is too large for ULog: one data message carries at most 65533 bytes"
     );
@@ -227,19 +219,7 @@ pub(crate) fn expand(input: &Input<'_>, topic: &str) -> TokenStream {
             }
 
             #[automatically_derived]
-            impl #p::Element for #ident {
-                const KIND: #p::TypedKind = #p::nested_kind::<Self>();
-
-                #[inline]
-                fn encode_element(&self, out: &mut #p::Vec<u8>) {
-                    <Self as #p::ULog>::encode(self, out);
-                }
-
-                #[inline]
-                fn decode_at(plan: &#p::FieldPlan, row: &[u8], offset: usize) -> Self {
-                    #p::decode_nested(plan, row, offset)
-                }
-            }
+            impl #p::DerivedElement for #ident {}
 
             #topic_impl
 

@@ -2,10 +2,9 @@
 //! anything here may change in any release.
 
 pub use crate::schema::{MAX_DATA_SIZE, Primitive};
-pub use crate::typed::field::{decode_nested, nested_kind};
 pub use crate::typed::{
-    DecodePlan, Element, FieldPlan, FieldValue, Padding, Topic, TypedField, TypedFormat, TypedKind,
-    ULog,
+    DecodePlan, DerivedElement, DerivedTopic, FieldPlan, FieldValue, Padding, TypedField,
+    TypedFormat, TypedKind, ULog,
 };
 pub use std::vec::Vec;
 

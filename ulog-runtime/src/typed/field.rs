@@ -97,7 +97,7 @@ pub trait Element: Sized {
 #[diagnostic::on_unimplemented(
     message = "`{Self}` cannot be a ULog field",
     label = "not a ULog field type",
-    note = "ULog fields are u8, i8, u16, i16, u32, i32, u64, i64, f32, f64, bool, `Char` (one char byte), `Chars<N>` (char[N] text), arrays `[T; N]` of those, structs deriving `ULog` and arrays of them, or `Option` of any of these (a field the file may lack)"
+    note = "ULog fields are u8, i8, u16, i16, u32, i32, u64, i64, f32, f64, bool, `Char` (one char byte), `Chars<N>` (char[N] text), arrays `[T; N]` of those, structs deriving `ULog` and arrays of them, or `Option` of any of these (a field the file may lack); arrays of arrays (multi-dimensional) do not exist in ULog: flatten them to one `[T; N]`"
 )]
 pub trait FieldValue: Sized {
     /// The ULog element type.
@@ -127,6 +127,9 @@ fn bytes_at<const N: usize>(row: &[u8], offset: usize) -> [u8; N] {
 
 macro_rules! numeric_elements {
     ($($ty:ty => $prim:ident, $loader:ident),* $(,)?) => {$(
+        // Not listed as "other types that implement `Element`" in errors: the trait's
+        // note already names every field type.
+        #[diagnostic::do_not_recommend]
         impl Element for $ty {
             const KIND: TypedKind = TypedKind::Primitive(Primitive::$prim);
             #[inline]
@@ -155,6 +158,7 @@ numeric_elements! {
     f64 => Double, load_float,
 }
 
+#[diagnostic::do_not_recommend]
 impl Element for bool {
     const KIND: TypedKind = TypedKind::Primitive(Primitive::Bool);
     #[inline]
@@ -197,6 +201,7 @@ impl fmt::Debug for Char {
     }
 }
 
+#[diagnostic::do_not_recommend]
 impl Element for Char {
     const KIND: TypedKind = TypedKind::Primitive(Primitive::Char);
     #[inline]
@@ -209,19 +214,28 @@ impl Element for Char {
     }
 }
 
-/// What `#[derive(ULog)]` puts in its `Element` impl: a nested type's kind...
+/// What `#[derive(ULog)]` implements to make a struct a nested element (its [`Element`]
+/// impl is this blanket one). Through a blanket impl marked `do_not_recommend`, the user's
+/// structs are never listed as "other types that implement `Element`" in errors, and the
+/// derive's output needs no diagnostic attribute (which `#![no_implicit_prelude]` code
+/// cannot name).
 #[doc(hidden)]
-pub const fn nested_kind<T: ULog>() -> TypedKind {
-    TypedKind::Nested(&T::FORMAT)
+pub trait DerivedElement: ULog {}
+
+#[diagnostic::do_not_recommend]
+impl<T: DerivedElement> Element for T {
+    const KIND: TypedKind = TypedKind::Nested(&T::FORMAT);
+    #[inline]
+    fn encode_element(&self, out: &mut Vec<u8>) {
+        self.encode(out);
+    }
+    #[inline]
+    fn decode_at(plan: &FieldPlan, row: &[u8], offset: usize) -> T {
+        T::decode(plan.nested_plan(), &row[offset..])
+    }
 }
 
-/// ...and its decoding at an offset, through the field's nested plan.
-#[doc(hidden)]
-#[inline]
-pub fn decode_nested<T: ULog>(plan: &FieldPlan, row: &[u8], offset: usize) -> T {
-    T::decode(plan.nested_plan(), &row[offset..])
-}
-
+#[diagnostic::do_not_recommend]
 impl<E: Element> FieldValue for E {
     const KIND: TypedKind = E::KIND;
     const ARRAY_LEN: Option<u16> = None;
@@ -248,6 +262,7 @@ const fn array_len(n: usize) -> u16 {
     n as u16
 }
 
+#[diagnostic::do_not_recommend]
 impl<E: Element, const N: usize> FieldValue for [E; N] {
     const KIND: TypedKind = E::KIND;
     const ARRAY_LEN: Option<u16> = Some(array_len(N));
@@ -269,6 +284,7 @@ impl<E: Element, const N: usize> FieldValue for [E; N] {
     }
 }
 
+#[diagnostic::do_not_recommend]
 impl<const N: usize> FieldValue for Chars<N> {
     const KIND: TypedKind = TypedKind::Primitive(Primitive::Char);
     const ARRAY_LEN: Option<u16> = Some(array_len(N));
@@ -284,6 +300,7 @@ impl<const N: usize> FieldValue for Chars<N> {
 
 /// A field a file may lack: `None` when the file's format has no field of that name.
 /// Writing `None` writes zeros.
+#[diagnostic::do_not_recommend]
 impl<F: FieldValue> FieldValue for Option<F> {
     const KIND: TypedKind = F::KIND;
     const ARRAY_LEN: Option<u16> = F::ARRAY_LEN;
@@ -320,6 +337,7 @@ pub trait Padding: Sized {
     const ZERO: Self;
 }
 
+#[diagnostic::do_not_recommend]
 impl<const N: usize> Padding for [u8; N] {
     const LEN: u16 = array_len(N);
     const ZERO: [u8; N] = [0; N];

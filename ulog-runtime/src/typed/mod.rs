@@ -99,7 +99,7 @@ mod view;
 mod widen;
 
 pub use check::{DecodePlan, FieldPlan, Mismatch, MismatchKind, TypedDecoder, TypedError};
-pub use field::{Char, Chars, Element, FieldValue, Padding};
+pub use field::{Char, Chars, DerivedElement, Element, FieldValue, Padding};
 pub use view::{TopicRows, TypedRows, TypedTopic};
 pub use widen::{common_type, widens};
 
@@ -129,6 +129,14 @@ pub trait ULog: Sized {
     note = "a type without `timestamp: u64` can only be nested in another ULog type"
 )]
 pub trait Topic: ULog {}
+
+/// What `#[derive(ULog)]` implements for a struct with a `timestamp`; its [`Topic`] impl is
+/// this blanket one (see [`DerivedElement`] for why).
+#[doc(hidden)]
+pub trait DerivedTopic: ULog {}
+
+#[diagnostic::do_not_recommend]
+impl<T: DerivedTopic> Topic for T {}
 
 /// The static description of a typed format.
 #[derive(Debug)]
