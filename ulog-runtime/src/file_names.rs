@@ -94,6 +94,28 @@ pub fn file_name(prefix: &str, name: &str, suffix: &str) -> String {
     format!("{prefix}{}{tag}{suffix}", &part[..room.min(part.len())])
 }
 
+/// The `n`-th choice of a file name for `name`: [`file_name`] for 1, then with `~n` before
+/// the extension (the last `.` of `suffix`): what [`FileNames::unique`] tries in turn, for
+/// callers that must look at each choice themselves (whether a folder of that name already
+/// holds something else).
+///
+/// ```
+/// use ulog_runtime::file_names::numbered;
+/// assert_eq!(numbered("log=", "flight", "", 1), "log=flight");
+/// assert_eq!(numbered("log=", "flight", "", 2), "log=flight~2");
+/// assert_eq!(numbered("", "gps", "_0.csv", 3), "gps_0~3.csv");
+/// ```
+pub fn numbered(prefix: &str, name: &str, suffix: &str, n: u32) -> String {
+    if n <= 1 {
+        return file_name(prefix, name, suffix);
+    }
+    let (stem, ext) = match suffix.rfind('.') {
+        Some(dot) => suffix.split_at(dot),
+        None => (suffix, ""),
+    };
+    file_name(prefix, name, &format!("{stem}~{n}{ext}"))
+}
+
 /// The file names of one output folder, unique without regard to case.
 #[derive(Debug, Default, Clone)]
 pub struct FileNames {
@@ -133,13 +155,8 @@ impl FileNames {
         let collided_with = self.taken.get(&first.to_lowercase()).cloned();
         let mut chosen = first.clone();
         if collided_with.is_some() {
-            let (stem, ext) = match suffix.rfind('.') {
-                Some(dot) => suffix.split_at(dot),
-                None => (suffix, ""),
-            };
             for n in 2.. {
-                let mark = format!("~{n}");
-                let candidate = file_name(prefix, name, &format!("{stem}{mark}{ext}"));
+                let candidate = numbered(prefix, name, suffix, n);
                 if !self.taken.contains_key(&candidate.to_lowercase()) {
                     chosen = candidate;
                     break;

@@ -170,6 +170,11 @@ fn a_fleet_in_hive_layout_is_one_duckdb_table_per_topic() {
 
 /// A log made by the writer: two topics, one with two instances, over 10 s.
 fn small_log(dir: &Path) -> PathBuf {
+    small_log_of(dir, "small.ulg", 10)
+}
+
+/// [`small_log`] over `seconds`, written to `dir/name`.
+fn small_log_of(dir: &Path, name: &str, seconds: u64) -> PathBuf {
     use ulog_runtime::{ULog, Writer, WriterOptions};
     #[derive(ULog)]
     struct Battery {
@@ -185,7 +190,7 @@ fn small_log(dir: &Path) -> PathBuf {
     let battery = w.topic::<Battery>(0).unwrap();
     let battery1 = w.topic::<Battery>(1).unwrap();
     let gps = w.topic::<Gps>(0).unwrap();
-    for s in 0..10u64 {
+    for s in 0..seconds {
         let t = s * 1_000_000;
         w.write(
             &battery,
@@ -212,9 +217,73 @@ fn small_log(dir: &Path) -> PathBuf {
         )
         .unwrap();
     }
-    let path = dir.join("small.ulg");
+    std::fs::create_dir_all(dir).unwrap();
+    let path = dir.join(name);
     std::fs::write(&path, w.into_inner()).unwrap();
     path
+}
+
+#[test]
+fn two_logs_of_one_stem_converted_in_two_runs_keep_both() {
+    use sha2::Digest;
+    let dir = temp_dir("parquet-same-stem");
+    let a = small_log_of(&dir.join("a"), "test.ulg", 4);
+    let b = small_log_of(&dir.join("b"), "test.ulg", 7);
+    let sha = |p: &Path| {
+        let d = sha2::Sha256::digest(std::fs::read(p).unwrap());
+        d.iter().map(|x| format!("{x:02x}")).collect::<String>()
+    };
+    let fleet = dir.join("fleet");
+    // What each log folder holds: the digest its metadata.json names, and the battery
+    // rows of its file.
+    let held = |log_dir: &str| -> (String, u64) {
+        let meta: serde_json::Value = serde_json::from_slice(
+            &std::fs::read(fleet.join("metadata").join(log_dir).join("metadata.json")).unwrap(),
+        )
+        .unwrap();
+        let file = meta["files"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|f| f["topic"] == "battery" && f["multi_id"] == 0)
+            .unwrap();
+        assert!(fleet.join(file["path"].as_str().unwrap()).is_file());
+        (
+            meta["log"]["sha256"].as_str().unwrap().to_owned(),
+            file["rows"].as_u64().unwrap(),
+        )
+    };
+    let run = |logs: &[&Path]| -> String {
+        let mut args = vec!["parquet"];
+        args.extend(logs.iter().map(|p| p.to_str().unwrap()));
+        args.extend(["-o", fleet.to_str().unwrap(), "--layout", "hive"]);
+        let out = ulog(&args);
+        assert!(out.status.success(), "{out:?}");
+        String::from_utf8(out.stderr).unwrap()
+    };
+    let first = run(&[&a, &b]);
+    assert!(
+        first.contains(&format!("{}: `log=test` holds another log", b.display()))
+            && first.contains("`log=test~2`"),
+        "the second log's new name is said: {first}"
+    );
+    // b again: its own folder is replaced, and it is said where that is.
+    let second = run(&[&b]);
+    assert!(second.contains("goes to `log=test~2`"), "{second}");
+    assert_eq!(
+        held("log=test"),
+        (sha(&a), 4),
+        "the first log's partition is kept"
+    );
+    assert_eq!(held("log=test~2"), (sha(&b), 7));
+    // A third, different log of that stem takes the next free name.
+    let c = small_log_of(&dir.join("c"), "test.ulg", 2);
+    let third = run(&[&c]);
+    assert!(third.contains("`log=test~3`"), "{third}");
+    assert_eq!(held("log=test"), (sha(&a), 4));
+    assert_eq!(held("log=test~2"), (sha(&b), 7));
+    assert_eq!(held("log=test~3"), (sha(&c), 2));
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

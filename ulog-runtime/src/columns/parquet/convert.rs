@@ -12,6 +12,7 @@ use parquet::errors::ParquetError;
 use serde::Serialize;
 use sha2::Digest;
 
+use super::fleet::TablePlace;
 use super::{Admission, AdmitRow, GpsClock, LogIdentity, ParquetOptions, Table, TableWritten};
 use crate::columns::ColumnSpec;
 use crate::document::{Collected, KEPT_DIAGNOSTICS, LogFacts};
@@ -88,8 +89,9 @@ impl std::fmt::Debug for Converter {
 pub struct Conversion {
     /// The log's file name.
     pub log: String,
-    /// The name of its output folder: its stem (`log=<stem>` in hive layout), made safe and
-    /// unique among the logs of one call.
+    /// The name of its output folder: its stem (`log=<stem>` in hive layout), made safe;
+    /// `<stem>~2`, `~3`... when that folder holds another log (see
+    /// [`Converter::convert_file`]).
     pub log_dir: String,
     /// Bytes of the log read.
     pub bytes: u64,
@@ -99,7 +101,8 @@ pub struct Conversion {
     pub metadata: PathBuf,
     /// What reading left out.
     pub skipped: Skipped,
-    /// Things a user should hear about: names that had to change to stay unique.
+    /// Things a user should hear about: names that had to change to stay unique (a topic's
+    /// file, the log's folder).
     pub notes: Vec<String>,
 }
 
@@ -145,21 +148,15 @@ impl Converter {
     }
 
     /// Converts the log at `path`; its outputs are named by its stem
-    /// ([`log_stem`](crate::file_names::log_stem)).
+    /// ([`log_stem`](crate::file_names::log_stem)): its folder is the first of `<stem>`,
+    /// `<stem>~2`... that holds this same log (same SHA-256 in its `metadata.json`: replaced)
+    /// or nothing, never another log's ([`Conversion::log_dir`], [`Conversion::notes`]).
     pub fn convert_file(&self, path: &Path) -> Result<Conversion, ConvertError> {
-        let stem = crate::file_names::log_stem(path);
-        self.convert_as(
-            path,
-            &self.options.layout.log_dir(&mut FileNames::new(), &stem),
-        )
+        self.convert_as(path, &crate::file_names::log_stem(path))
     }
 
-    /// [`Converter::convert_file`] into the log folder `log_dir`.
-    pub(super) fn convert_as(
-        &self,
-        path: &Path,
-        log_dir: &str,
-    ) -> Result<Conversion, ConvertError> {
+    /// [`Converter::convert_file`], its outputs named by `stem`.
+    pub(super) fn convert_as(&self, path: &Path, stem: &str) -> Result<Conversion, ConvertError> {
         let name = path
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -168,27 +165,27 @@ impl Converter {
             log: path.display().to_string(),
             source: ReadError::Io(e),
         })?;
-        self.convert_reader_as(file, &name, &path.display().to_string(), log_dir)
+        self.convert_reader_as(file, &name, &path.display().to_string(), stem)
     }
 
-    /// Converts a log read from `input`, named `file_name` (its outputs by its stem).
+    /// Converts a log read from `input`, named `file_name` (its outputs by its stem, as
+    /// [`Converter::convert_file`] names them).
     pub fn convert_reader(
         &self,
         input: impl Read,
         file_name: &str,
     ) -> Result<Conversion, ConvertError> {
         let stem = crate::file_names::log_stem(file_name.as_ref());
-        let log_dir = self.options.layout.log_dir(&mut FileNames::new(), &stem);
-        self.convert_reader_as(input, file_name, file_name, &log_dir)
+        self.convert_reader_as(input, file_name, file_name, &stem)
     }
 
-    /// Converts a log named `file_name` (`label` in errors) into the log folder `log_dir`.
+    /// Converts a log named `file_name` (`label` in errors), its outputs named by `stem`.
     fn convert_reader_as(
         &self,
         input: impl Read,
         file_name: &str,
         label: &str,
-        log_dir: &str,
+        stem: &str,
     ) -> Result<Conversion, ConvertError> {
         let read_error = |source| ConvertError::Read {
             log: label.to_owned(),
@@ -202,7 +199,7 @@ impl Converter {
             progress: self.progress.as_deref(),
         };
         let mut reader = StreamReader::new(&mut input).map_err(read_error)?;
-        let mut pass = Pass::new(self, log_dir);
+        let mut pass = Pass::new(self, stem);
         pass.clock = GpsClock::new(reader.metadata().header().start_timestamp);
         reader
             .for_each_event(|event| pass.event(&event))
@@ -335,7 +332,11 @@ impl Drop for Outputs {
 struct Instance {
     topic: String,
     multi_id: u8,
+    /// Where its file goes in whichever folder the log takes.
+    place: TablePlace,
+    /// Its path in the first choice of folder (errors say it).
     path: PathBuf,
+    /// Where it is written until the pass is done.
     partial: PathBuf,
     window: Admission,
     table: Table<Reopening>,
@@ -353,6 +354,10 @@ struct Summary {
 /// The state of one conversion pass.
 struct Pass<'c> {
     converter: &'c Converter,
+    /// The log's stem.
+    stem: String,
+    /// The first choice of the log's folder: the files are written there (as `.partial`)
+    /// until the log's digest says which folder it takes.
     log_dir: String,
     names: FileNames,
     notes: Vec<String>,
@@ -374,10 +379,11 @@ struct Pass<'c> {
 }
 
 impl<'c> Pass<'c> {
-    fn new(converter: &'c Converter, log_dir: &str) -> Pass<'c> {
+    fn new(converter: &'c Converter, stem: &str) -> Pass<'c> {
         Pass {
             converter,
-            log_dir: log_dir.to_owned(),
+            stem: stem.to_owned(),
+            log_dir: converter.options.layout.log_dir(stem, 1),
             names: FileNames::new(),
             notes: Vec::new(),
             by_msg_id: vec![(UNSEEN, UNSEEN); 1 << 16],
@@ -545,14 +551,13 @@ impl<'c> Pass<'c> {
     /// A new instance: its file's name (the file is made with its first row group).
     fn instance(&mut self, spec: ColumnSpec, topic: &str, multi_id: u8) -> Instance {
         let converter = self.converter;
-        let (path, collided) = converter.options.layout.table_path(
-            &converter.root,
-            &self.log_dir,
+        let (place, collided) = converter.options.layout.table_place(
             &mut self.names,
             &converter.topic_dirs,
             topic,
             multi_id,
         );
+        let path = place.path(&converter.root, &self.log_dir);
         if let Some(other) = collided {
             self.notes.push(format!(
                 "topics `{other}` and `{topic}` map to one file name; `{topic}` #{multi_id} goes to {}",
@@ -572,6 +577,7 @@ impl<'c> Pass<'c> {
         Instance {
             topic: topic.to_owned(),
             multi_id,
+            place,
             path,
             partial,
             window: Admission::new(converter.options.window),
@@ -580,9 +586,10 @@ impl<'c> Pass<'c> {
         }
     }
 
-    /// Closes every table with the log's identity, writes `metadata.json`, then gives every
-    /// file its name, and removes the files of an earlier conversion of this log that this
-    /// one did not write.
+    /// Closes every table with the log's identity, chooses the log's folder
+    /// ([`Converter::claim_log_dir`]), writes `metadata.json`, then gives every file its
+    /// name, and removes the files of an earlier conversion of this log that this one did
+    /// not write.
     fn finish(
         mut self,
         identity: &LogIdentity,
@@ -590,21 +597,30 @@ impl<'c> Pass<'c> {
         bytes: u64,
     ) -> Result<Conversion, ConvertError> {
         let root = self.converter.root.clone();
+        let (log_dir, moved) = self.converter.claim_log_dir(&self.stem, &identity.sha256);
+        if moved {
+            self.notes.push(format!(
+                "`{}` holds another log (another sha256); this one goes to `{log_dir}`",
+                self.log_dir
+            ));
+        }
         let mut files = Vec::with_capacity(self.instances.len());
         let mut renames = Vec::new();
         for inst in std::mem::take(&mut self.instances) {
             let Instance {
                 topic,
                 multi_id,
-                path,
+                place,
                 partial,
                 table,
+                path: first_choice,
                 ..
             } = inst;
+            let path = place.path(&root, &log_dir);
             let (written, TableWritten { rows, row_groups }) = table
                 .close(identity, false)
                 .map_err(|source| ConvertError::Parquet {
-                    path: path.clone(),
+                    path: first_choice,
                     topic: topic.clone(),
                     multi_id,
                     source,
@@ -636,11 +652,7 @@ impl<'c> Pass<'c> {
                 skipped: &self.skipped,
             },
         );
-        let metadata = self
-            .converter
-            .options
-            .layout
-            .metadata_path(&root, &self.log_dir);
+        let metadata = self.converter.options.layout.metadata_path(&root, &log_dir);
         let earlier = earlier_files(&root, &metadata);
         let document = MetadataJson {
             log: identity,
@@ -660,10 +672,17 @@ impl<'c> Pass<'c> {
         write_json(&metadata_partial, &document)?;
         renames.push((metadata_partial, metadata.clone()));
         for (from, to) in &renames {
-            std::fs::rename(from, to).map_err(|source| ConvertError::Io {
+            let io = |source| ConvertError::Io {
                 path: to.clone(),
                 source,
-            })?;
+            };
+            // Written in the first choice of folder; the log may have taken another.
+            if let Some(dir) = to.parent()
+                && from.parent() != Some(dir)
+            {
+                std::fs::create_dir_all(dir).map_err(io)?;
+            }
+            std::fs::rename(from, to).map_err(io)?;
             self.outputs.paths.push(to.clone());
         }
         self.outputs.kept = true;
@@ -674,7 +693,7 @@ impl<'c> Pass<'c> {
         }
         Ok(Conversion {
             log: identity.file_name.clone(),
-            log_dir: self.log_dir.clone(),
+            log_dir,
             bytes,
             files,
             metadata,

@@ -1,4 +1,5 @@
-//! Where a conversion's files go ([`Layout`]), and many logs converted at once, in parallel
+//! Where a conversion's files go ([`Layout`]), which folder a log takes (never another
+//! log's: [`Converter::claim_log_dir`]), and many logs converted at once, in parallel
 //! ([`Converter::convert_files`]).
 
 use std::collections::HashMap;
@@ -26,31 +27,31 @@ pub enum Layout {
 }
 
 impl Layout {
-    /// The name of a log's folder (`<stem>`, or `log=<stem>` for hive), unique among `names`.
-    pub(super) fn log_dir(self, names: &mut FileNames, stem: &str) -> String {
+    /// The `n`-th choice of the name of a log's folder: `<stem>` (`log=<stem>` for hive),
+    /// then `<stem>~2`, `<stem>~3`... (see [`Converter::claim_log_dir`]).
+    pub(super) fn log_dir(self, stem: &str, n: u32) -> String {
         let prefix = match self {
             Layout::PerLog => "",
             Layout::Hive => "log=",
         };
-        names.unique(prefix, stem, "").file_name
+        crate::file_names::numbered(prefix, stem, "", n)
     }
 
-    /// The path of a topic instance's file; the other topic name it collided with, if its
-    /// name had to be made unique. `names` are the log's file names (per-log layout);
-    /// `topic_dirs` the topics' folders (hive), the same for every log of a converter.
-    pub(super) fn table_path(
+    /// Where a topic instance's file goes, whatever log folder holds it; the other topic
+    /// name it collided with, if its name had to be made unique. `names` are the log's file
+    /// names (per-log layout); `topic_dirs` the topics' folders (hive), the same for every
+    /// log of a converter.
+    pub(super) fn table_place(
         self,
-        root: &Path,
-        log_dir: &str,
         names: &mut FileNames,
         topic_dirs: &Mutex<TopicDirs>,
         topic: &str,
         multi_id: u8,
-    ) -> (PathBuf, Option<String>) {
+    ) -> (TablePlace, Option<String>) {
         match self {
             Layout::PerLog => {
                 let name = names.unique("", topic, &format!("_{multi_id}.parquet"));
-                (root.join(log_dir).join(name.file_name), name.collided_with)
+                (TablePlace::InLogDir(name.file_name), name.collided_with)
             }
             Layout::Hive => {
                 let mut dirs = topic_dirs.lock().unwrap_or_else(|e| e.into_inner());
@@ -62,10 +63,10 @@ impl Layout {
                     name.file_name
                 });
                 (
-                    root.join(dir.as_str())
-                        .join(log_dir)
-                        .join(format!("multi_id={multi_id}"))
-                        .join("data.parquet"),
+                    TablePlace::Hive {
+                        topic_dir: dir.clone(),
+                        multi_id,
+                    },
                     collided,
                 )
             }
@@ -81,6 +82,80 @@ impl Layout {
     }
 }
 
+/// Where a table's file goes, relative to its log's folder: the log's folder is chosen when
+/// the log has been read whole ([`Converter::claim_log_dir`]).
+#[derive(Debug, Clone)]
+pub(super) enum TablePlace {
+    /// `DIR/<log_dir>/<file name>`.
+    InLogDir(String),
+    /// `DIR/<topic_dir>/<log_dir>/multi_id=<m>/data.parquet`.
+    Hive {
+        /// `topic=<topic>`, unique among the converter's topics.
+        topic_dir: String,
+        /// The instance.
+        multi_id: u8,
+    },
+}
+
+impl TablePlace {
+    /// The file's path when its log's folder is `log_dir`.
+    pub(super) fn path(&self, root: &Path, log_dir: &str) -> PathBuf {
+        match self {
+            TablePlace::InLogDir(name) => root.join(log_dir).join(name),
+            TablePlace::Hive {
+                topic_dir,
+                multi_id,
+            } => root
+                .join(topic_dir)
+                .join(log_dir)
+                .join(format!("multi_id={multi_id}"))
+                .join("data.parquet"),
+        }
+    }
+}
+
+/// What a log folder holds, as its `metadata.json` says.
+enum Held {
+    /// No `metadata.json`: free.
+    Nothing,
+    /// A conversion of the log with this SHA-256.
+    Log(String),
+    /// A `metadata.json` that does not say which log: never replaced.
+    Unknown,
+}
+
+fn held(metadata: &Path) -> Held {
+    let text = match std::fs::read(metadata) {
+        Ok(text) => text,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Held::Nothing,
+        Err(_) => return Held::Unknown,
+    };
+    serde_json::from_slice::<serde_json::Value>(&text)
+        .ok()
+        .and_then(|doc| Some(doc.get("log")?.get("sha256")?.as_str()?.to_owned()))
+        .map_or(Held::Unknown, Held::Log)
+}
+
+impl Converter {
+    /// The folder of the log with digest `sha256` and stem `stem`: the first of `<stem>`,
+    /// `<stem>~2`, `<stem>~3`... that holds this same log (its `metadata.json` has this
+    /// SHA-256: a new conversion replaces it) or holds nothing, never one that holds another
+    /// log (or a `metadata.json` that does not say which). The choice, and whether it is
+    /// not the first.
+    pub(super) fn claim_log_dir(&self, stem: &str, sha256: &str) -> (String, bool) {
+        let layout = self.options.layout;
+        for n in 1.. {
+            let dir = layout.log_dir(stem, n);
+            match held(&layout.metadata_path(&self.root, &dir)) {
+                Held::Nothing => return (dir, n > 1),
+                Held::Log(other) if other == sha256 => return (dir, n > 1),
+                Held::Log(_) | Held::Unknown => {}
+            }
+        }
+        unreachable!("a name is found before the numbers run out")
+    }
+}
+
 /// The topics' folders of a hive layout: distinct topics never share one.
 #[derive(Debug, Default)]
 pub(super) struct TopicDirs {
@@ -90,33 +165,48 @@ pub(super) struct TopicDirs {
 
 impl Converter {
     /// Converts every log of `paths` on `threads` threads (at least one; a log per thread at
-    /// a time), giving each its own outputs: logs whose stems would collide (`a/x.ulg` and
-    /// `b/x.ulg`) get folders `x` and `x~2` (`log=x`, `log=x~2`). The results are in the order of `paths`; a log that
-    /// fails does not stop the others.
+    /// a time). Logs with the same stem (`a/x.ulg` and `b/x.ulg`) are converted one after
+    /// the other, in the order of `paths`: each goes to the first folder of `x`, `x~2`...
+    /// that holds the same log or nothing ([`Conversion::log_dir`], with a note when it is
+    /// not the first), so no conversion replaces another log's files. The results are in the
+    /// order of `paths`; a log that fails does not stop the others.
     pub fn convert_files(
         &self,
         paths: &[PathBuf],
         threads: usize,
     ) -> Vec<Result<Conversion, ConvertError>> {
-        let mut names = FileNames::new();
         let layout = self.options.layout;
-        let dirs: Vec<String> = paths
+        let stems: Vec<String> = paths
             .iter()
-            .map(|p| layout.log_dir(&mut names, &crate::file_names::log_stem(p)))
+            .map(|p| crate::file_names::log_stem(p))
             .collect();
+        // Logs whose folders could collide (names equal without regard to case) form one
+        // group, converted in order by one thread.
+        let mut groups: Vec<Vec<usize>> = Vec::new();
+        let mut group_of: HashMap<String, usize> = HashMap::new();
+        for (i, stem) in stems.iter().enumerate() {
+            let key = layout.log_dir(stem, 1).to_lowercase();
+            let g = *group_of.entry(key).or_insert_with(|| {
+                groups.push(Vec::new());
+                groups.len() - 1
+            });
+            groups[g].push(i);
+        }
         let results: Vec<Mutex<Option<Result<Conversion, ConvertError>>>> =
             paths.iter().map(|_| Mutex::new(None)).collect();
         let next = AtomicUsize::new(0);
         let work = || {
             loop {
-                let i = next.fetch_add(1, Ordering::Relaxed);
-                let Some(path) = paths.get(i) else { break };
-                let result = self.convert_as(path, &dirs[i]);
-                *results[i].lock().unwrap_or_else(|e| e.into_inner()) = Some(result);
+                let g = next.fetch_add(1, Ordering::Relaxed);
+                let Some(group) = groups.get(g) else { break };
+                for &i in group {
+                    let result = self.convert_as(&paths[i], &stems[i]);
+                    *results[i].lock().unwrap_or_else(|e| e.into_inner()) = Some(result);
+                }
             }
         };
         std::thread::scope(|scope| {
-            for _ in 1..threads.clamp(1, paths.len().max(1)) {
+            for _ in 1..threads.clamp(1, groups.len().max(1)) {
                 scope.spawn(work);
             }
             work();

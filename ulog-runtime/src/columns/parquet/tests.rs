@@ -333,13 +333,13 @@ fn a_new_conversion_of_a_log_replaces_the_files_of_the_earlier_one() {
 
 #[test]
 fn hive_layout_partitions_by_topic_log_and_instance() {
-    let bytes = log_bytes(10);
     let root = temp("hive");
     let a = root.join("a");
     let b = root.join("b");
-    for dir in [&a, &b] {
+    // Two different logs of one stem.
+    for (dir, rows) in [(&a, 10), (&b, 11)] {
         std::fs::create_dir_all(dir).unwrap();
-        std::fs::write(dir.join("same.ulg"), &bytes).unwrap();
+        std::fs::write(dir.join("same.ulg"), log_bytes(rows)).unwrap();
     }
     let out = root.join("out");
     let converter = Converter::new(
@@ -556,4 +556,122 @@ fn no_name_from_a_log_writes_outside_the_output_folder() {
         );
         std::fs::remove_dir_all(&root).unwrap();
     }
+}
+
+/// Rows of `battery` #0 in a converted file, and the log digest it says it comes from.
+fn battery_rows(path: &Path) -> (usize, String) {
+    let (batches, kv, _) = read(path);
+    (
+        batches.iter().map(RecordBatch::num_rows).sum(),
+        kv["ulog.sha256"].clone(),
+    )
+}
+
+#[test]
+fn a_conversion_never_replaces_another_logs_files() {
+    for layout in [Layout::PerLog, Layout::Hive] {
+        let root = temp(&format!("same-stem-{layout:?}"));
+        let (a, b, c) = (root.join("a"), root.join("b"), root.join("c"));
+        for (dir, rows) in [(&a, 10), (&b, 11), (&c, 10)] {
+            std::fs::create_dir_all(dir).unwrap();
+            std::fs::write(dir.join("test.ulg"), log_bytes(rows)).unwrap();
+        }
+        let digest = |p: &Path| {
+            let d = sha2::Sha256::digest(std::fs::read(p).unwrap());
+            d.iter().map(|b| format!("{b:02x}")).collect::<String>()
+        };
+        let (sha_a, sha_b) = (digest(&a.join("test.ulg")), digest(&b.join("test.ulg")));
+        assert_eq!(sha_a, digest(&c.join("test.ulg")), "c is a copy of a");
+        let out = root.join("out");
+        // Each conversion its own converter, as separate runs of `ulog parquet` are.
+        let convert = |log: &Path| {
+            let options = ParquetOptions {
+                layout,
+                ..ParquetOptions::default()
+            };
+            Converter::new(&out, options).convert_file(log).unwrap()
+        };
+        let first = convert(&a.join("test.ulg"));
+        let second = convert(&b.join("test.ulg"));
+        assert_eq!(first.notes, Vec::<String>::new());
+        assert_ne!(first.log_dir, second.log_dir, "{layout:?}");
+        assert!(second.log_dir.ends_with("test~2"), "{}", second.log_dir);
+        assert_eq!(second.notes.len(), 1, "{:?}", second.notes);
+        assert!(
+            second.notes[0].contains("holds another log") && second.notes[0].contains("test~2"),
+            "{}",
+            second.notes[0]
+        );
+        let battery = |c: &Conversion| {
+            let f = c
+                .files
+                .iter()
+                .find(|f| f.topic == "battery" && f.multi_id == 0)
+                .unwrap();
+            battery_rows(&f.path)
+        };
+        assert_eq!(battery(&first), (10, sha_a.clone()), "a's files kept");
+        assert_eq!(battery(&second), (11, sha_b.clone()));
+        // The same log again (and an identical copy of it) replaces its own folder,
+        // whichever name it has.
+        for again in [a.join("test.ulg"), c.join("test.ulg"), b.join("test.ulg")] {
+            let conv = convert(&again);
+            let expected = if again.starts_with(&b) {
+                &second.log_dir
+            } else {
+                &first.log_dir
+            };
+            assert_eq!(&conv.log_dir, expected, "{}", again.display());
+            assert_eq!(conv.notes.is_empty(), !again.starts_with(&b));
+        }
+        assert_eq!(battery(&first), (10, sha_a.clone()));
+        assert_eq!(battery(&second), (11, sha_b.clone()));
+        // A folder whose metadata.json does not say which log it holds is never replaced.
+        let foreign = layout.metadata_path(&out, &layout.log_dir("other", 1));
+        std::fs::create_dir_all(foreign.parent().unwrap()).unwrap();
+        std::fs::write(&foreign, b"{}").unwrap();
+        std::fs::write(a.join("other.ulg"), log_bytes(3)).unwrap();
+        let other = convert(&a.join("other.ulg"));
+        assert!(other.log_dir.ends_with("other~2"), "{}", other.log_dir);
+        assert_eq!(std::fs::read(&foreign).unwrap(), b"{}");
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+}
+
+#[test]
+fn logs_of_one_stem_in_one_run_take_folders_in_the_order_given() {
+    let root = temp("one-run");
+    let paths: Vec<PathBuf> = ["a", "b", "c"]
+        .iter()
+        .zip([4, 5, 4])
+        .map(|(d, rows)| {
+            let dir = root.join(d);
+            std::fs::create_dir_all(&dir).unwrap();
+            let p = dir.join("x.ulg");
+            std::fs::write(&p, log_bytes(rows)).unwrap();
+            p
+        })
+        .collect();
+    let out = root.join("out");
+    let converter = Converter::new(&out, ParquetOptions::default());
+    for _ in 0..2 {
+        let dirs: Vec<(String, usize)> = converter
+            .convert_files(&paths, 3)
+            .into_iter()
+            .map(|r| {
+                let c = r.unwrap();
+                (c.log_dir, c.notes.len())
+            })
+            .collect();
+        // c is a's twin: it replaces a's folder, as a conversion of a would.
+        assert_eq!(
+            dirs,
+            [
+                ("x".to_owned(), 0),
+                ("x~2".to_owned(), 1),
+                ("x".to_owned(), 0)
+            ]
+        );
+    }
+    std::fs::remove_dir_all(&root).unwrap();
 }
