@@ -12,7 +12,7 @@
 
 use examples::topics::{BatteryCell, BatteryStatus, VehicleAttitude};
 use ulog_runtime::read::ParamValue;
-use ulog_runtime::{Event, Log, StreamReader, ULog, Value, Writer, WriterOptions};
+use ulog_runtime::{Event, Log, LogLevel, StreamReader, ULog, Value, Writer, WriterOptions};
 
 /// A topic written by hand: the derive makes it a ULog format named `gps`.
 #[derive(ULog, Debug, Clone, PartialEq)]
@@ -76,7 +76,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             },
         )?;
     }
-    w.log(b'6', 1_450_000, "landed")?;
+    w.log(LogLevel::Info, 1_450_000, "landed")?;
     w.flush()?;
     drop(w);
     let bytes = std::fs::read(&path)?;

@@ -19,10 +19,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let log = Log::open(&path)?;
 
     // One topic instance as typed columns.
-    if let Some(battery) = log.columns("battery_status", 0) {
+    if let Ok(battery) = log.columns("battery_status", 0) {
         let volts = battery
             .get("voltage_v")
-            .and_then(|c| c.as_f32())
+            .and_then(|c| c.as_float())
             .unwrap_or_default();
         let mean = volts.iter().map(|&v| f64::from(v)).sum::<f64>() / volts.len().max(1) as f64;
         println!(

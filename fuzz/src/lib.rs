@@ -32,7 +32,7 @@ pub fn whole_file(data: &[u8]) {
     let _ = log.not_utf8();
     for instance in log.instances(&[]) {
         let sub = instance[0];
-        if let Some(cols) = log.columns(&sub.name, sub.multi_id) {
+        if let Ok(cols) = log.columns(&sub.name, sub.multi_id) {
             let rows = log.instance_rows(&instance).count();
             assert_eq!(cols.rows(), rows, "{}: columns of every row", sub.name);
         }

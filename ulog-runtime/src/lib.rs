@@ -51,7 +51,7 @@ pub mod value;
 pub mod write;
 
 pub use error::{Diagnostic, DiagnosticKind, ReadError};
-pub use read::{Event, Log, Row, StreamReader};
+pub use read::{Event, Log, LogLevel, Row, StreamReader};
 pub use typed::{Char, Chars, Topic, TypedError, ULog};
 #[cfg(feature = "derive")]
 pub use ulog_derive::ULog;

@@ -268,6 +268,7 @@ pub(crate) fn read_log(
             return Err(CodegenError::TopicNotInLog {
                 path: path.to_owned(),
                 topic: topic.clone(),
+                suggestions: schema.suggest(topic),
             });
         }
         stack.push(topic.clone());

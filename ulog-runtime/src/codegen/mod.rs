@@ -154,12 +154,14 @@ pub enum CodegenError {
         message: String,
     },
     /// A topic asked for that no `.msg` file of a folder defines.
-    #[error("{}: no .msg file defines topic `{topic}`", dir.display())]
+    #[error("{}: no .msg file defines topic `{topic}`{}", dir.display(), crate::schema::did_you_mean(.suggestions))]
     TopicNotInMsg {
         /// The folder.
         dir: PathBuf,
         /// The topic.
         topic: String,
+        /// The folder's topics closest to it (at most 3, closest first).
+        suggestions: Vec<String>,
     },
     /// Merging strictly ([`Merge::Strict`]): a field whose types across the inputs have no
     /// lossless common type.
@@ -181,12 +183,14 @@ pub enum CodegenError {
         error: String,
     },
     /// A topic asked for is not in the log.
-    #[error("{}: no format `{topic}` in this log", path.display())]
+    #[error("{}: no format `{topic}` in this log{}", path.display(), crate::schema::did_you_mean(.suggestions))]
     TopicNotInLog {
         /// The log.
         path: PathBuf,
         /// The topic.
         topic: String,
+        /// The log's formats closest to it (at most 3, closest first).
+        suggestions: Vec<String>,
     },
     /// Two different definitions under one name.
     #[error(
@@ -439,29 +443,25 @@ impl Builder {
 
     /// The files and folders [`Builder::generate`] asks cargo to watch
     /// (`cargo:rerun-if-changed`): every TOML file, log and `.msg` file, and every `.msg`
-    /// folder (for files added or removed) with its files.
-    pub fn watched_files(&self) -> Result<Vec<PathBuf>, CodegenError> {
-        let mut out = Vec::new();
-        for input in &self.inputs {
-            match input {
-                Input::Toml(path) | Input::Log { path, .. } | Input::Msg(path) => {
-                    out.push(path.clone());
-                }
-                Input::MsgDir { dir, .. } => {
-                    out.push(dir.clone());
-                    out.extend(msg::files_in(dir)?);
-                }
-                Input::Format(_) => {}
-            }
-        }
-        Ok(out)
+    /// folder as one path (cargo scans a folder for any change of the files in it, added
+    /// and removed ones included).
+    pub fn watched_files(&self) -> Vec<PathBuf> {
+        self.inputs
+            .iter()
+            .filter_map(|input| match input {
+                Input::Toml(path) | Input::Log { path, .. } | Input::Msg(path) => Some(path),
+                Input::MsgDir { dir, .. } => Some(dir),
+                Input::Format(_) => None,
+            })
+            .cloned()
+            .collect()
     }
 
     /// Writes the generated file: a relative `file` goes into `OUT_DIR`. The file is rewritten
     /// only if its content changes; `cargo:rerun-if-changed` is printed for every input file.
     /// Returns the path written.
     pub fn generate(&self, file: impl AsRef<Path>) -> Result<PathBuf, CodegenError> {
-        for path in self.watched_files()? {
+        for path in self.watched_files() {
             println!("cargo:rerun-if-changed={}", path.display());
         }
         let content = self.render()?;
@@ -713,9 +713,22 @@ fn select_msg(
             .iter()
             .copied()
             .find(|&i| defines(i, topic))
-            .ok_or_else(|| CodegenError::TopicNotInMsg {
-                dir: dir.to_owned(),
-                topic: topic.clone(),
+            .ok_or_else(|| {
+                let names: Vec<String> = files
+                    .iter()
+                    .flat_map(|&i| {
+                        let f = &all[i];
+                        std::iter::once(msg::snake_case(&f.type_name)).chain(f.topics.clone())
+                    })
+                    .collect();
+                CodegenError::TopicNotInMsg {
+                    dir: dir.to_owned(),
+                    topic: topic.clone(),
+                    suggestions: crate::schema::closest_names(
+                        topic,
+                        names.iter().map(String::as_str),
+                    ),
+                }
             })?;
         wanted.push(i);
     }

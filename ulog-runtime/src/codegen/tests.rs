@@ -261,17 +261,25 @@ fn msg_folders_resolve_across_inputs_and_select_topics() {
             ("Unused.msg", "uint64 timestamp\n"),
         ],
     );
-    // `generate` asks cargo to watch the folder and each of its files.
+    // `generate` asks cargo to watch the folder, which cargo scans, as one path.
     let watched = Builder::new()
         .msg_dir(&dir)
         .format("x:uint8_t a;")
-        .watched_files()
-        .unwrap();
-    let mut expected = vec![dir.clone()];
-    for f in ["Attitude.msg", "Report.msg", "Status.msg", "Unused.msg"] {
-        expected.push(dir.join(f));
-    }
-    assert_eq!(watched, expected);
+        .msg(dir.join("Report.msg"))
+        .watched_files();
+    assert_eq!(watched, [dir.clone(), dir.join("Report.msg")]);
+    // A topic misspelled: the closest names of the folder are suggested.
+    let err = Builder::new()
+        .msg_dir_topics(&dir, &["statuss"])
+        .types()
+        .unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        format!(
+            "{}: no .msg file defines topic `statuss`; did you mean `status`?",
+            dir.display()
+        )
+    );
     // A nested type from another input (a format string), used by the folder.
     let types = Builder::new()
         .msg_dir_topics(&dir, &["estimator_attitude", "status"])
@@ -342,4 +350,26 @@ fn merging_strictly_refuses_fields_without_a_common_type() {
             .to_string()
             .contains("cannot be exact")
     );
+}
+
+#[test]
+fn a_topic_a_log_lacks_suggests_the_closest_it_has() {
+    let mut w = crate::Writer::new(Vec::new(), crate::WriterOptions::default()).unwrap();
+    w.format("battery:uint64_t timestamp;float voltage_v;")
+        .unwrap();
+    w.subscribe("battery", 0).unwrap();
+    let path = std::env::temp_dir().join(format!("ulog-codegen-topic-{}.ulg", std::process::id()));
+    std::fs::write(&path, w.into_inner()).unwrap();
+    let err = Builder::new()
+        .ulog_topics(&path, &["batery"])
+        .types()
+        .unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        format!(
+            "{}: no format `batery` in this log; did you mean `battery`?",
+            path.display()
+        )
+    );
+    std::fs::remove_file(&path).unwrap();
 }

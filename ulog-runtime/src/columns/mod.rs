@@ -24,8 +24,8 @@
 //! let log = Log::from_vec(w.into_inner())?;
 //! let columns = log.columns("battery", 0).unwrap();
 //! assert_eq!(columns.names().collect::<Vec<_>>(), ["timestamp", "voltage_v", "cells[0]", "cells[1]"]);
-//! assert_eq!(columns.get("voltage_v").unwrap().as_f32(), Some(&[16.0, 17.0, 18.0][..]));
-//! assert_eq!(columns.get("timestamp").unwrap().as_u64(), Some(&[1, 2, 3][..]));
+//! assert_eq!(columns.get("voltage_v").unwrap().as_float(), Some(&[16.0, 17.0, 18.0][..]));
+//! assert_eq!(columns.get("timestamp").unwrap().as_uint64(), Some(&[1, 2, 3][..]));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
@@ -326,10 +326,14 @@ pub enum ColumnValues {
 }
 
 macro_rules! accessors {
-    ($($name:ident: $variant:ident($ty:ty)),* $(,)?) => {
+    ($($name:ident: $variant:ident($ty:ty, $ulog:literal)),* $(,)?) => {
         impl ColumnValues {
             $(
-                #[doc = concat!("The values, if the column holds `", stringify!($ty), "`.")]
+                #[doc = concat!(
+                    "The values as stored, if the column is `", $ulog, "` (`", stringify!($ty),
+                    "`); `None` for any other type, as nothing is converted here: ",
+                    "[`ColumnValues::to_f64`] converts every numeric column."
+                )]
                 pub fn $name(&self) -> Option<&[$ty]> {
                     match self {
                         ColumnValues::$variant(v) => Some(v),
@@ -341,11 +345,15 @@ macro_rules! accessors {
     };
 }
 
+// Named after the ULog types (`as_float` holds `float`s), so that no name promises a
+// conversion: `to_f64` is the one that converts.
 accessors! {
-    as_i8: Int8(i8), as_u8: UInt8(u8), as_i16: Int16(i16), as_u16: UInt16(u16),
-    as_i32: Int32(i32), as_u32: UInt32(u32), as_i64: Int64(i64), as_u64: UInt64(u64),
-    as_f32: Float(f32), as_f64: Double(f64), as_bool: Bool(bool), as_char: Char(u8),
-    as_text: Text(String),
+    as_int8: Int8(i8, "int8_t"), as_uint8: UInt8(u8, "uint8_t"),
+    as_int16: Int16(i16, "int16_t"), as_uint16: UInt16(u16, "uint16_t"),
+    as_int32: Int32(i32, "int32_t"), as_uint32: UInt32(u32, "uint32_t"),
+    as_int64: Int64(i64, "int64_t"), as_uint64: UInt64(u64, "uint64_t"),
+    as_float: Float(f32, "float"), as_double: Double(f64, "double"),
+    as_bool: Bool(bool, "bool"), as_char: Char(u8, "char"), as_text: Text(String, "char[N]"),
 }
 
 impl ColumnValues {
@@ -372,8 +380,9 @@ impl ColumnValues {
         self.len() == 0
     }
 
-    /// Every value as `f64` (`bool` as 0/1, `char` as a signed byte, 64-bit integers beyond
-    /// 2^53 rounded); `None` for text.
+    /// Every value converted to `f64`, whatever the column's type (`bool` as 0/1, `char` as a
+    /// signed byte, 64-bit integers beyond 2^53 rounded); `None` for text. The `as_*`
+    /// accessors give the stored values without converting.
     pub fn to_f64(&self) -> Option<Vec<f64>> {
         Some(match self {
             ColumnValues::Int8(v) => v.iter().map(|&x| f64::from(x)).collect(),
@@ -666,19 +675,105 @@ pub fn text(bytes: &[u8]) -> String {
         .collect()
 }
 
+/// Why a log has no columns of a topic instance ([`Log::columns`]).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ColumnsError {
+    /// The log never subscribes a topic of this name.
+    #[error("the log has no topic `{topic}`{}", crate::schema::did_you_mean(.suggestions))]
+    NoSuchTopic {
+        /// The topic asked for.
+        topic: String,
+        /// The log's topics closest to it (at most 3, closest first).
+        suggestions: Vec<String>,
+    },
+    /// The topic has no subscription with this instance number.
+    #[error("`{topic}` has no instance {multi_id} (instances: {available:?})")]
+    NoInstance {
+        /// The topic.
+        topic: String,
+        /// The instance asked for.
+        multi_id: u8,
+        /// The instances the log has.
+        available: Vec<u8>,
+    },
+    /// The instance's format cannot be laid out (a nested type the log does not define...):
+    /// its rows cannot be decoded.
+    #[error("`{topic}` #{multi_id}: its format cannot be read, so neither can its rows")]
+    Unreadable {
+        /// The topic.
+        topic: String,
+        /// The instance.
+        multi_id: u8,
+    },
+}
+
 impl Log<'_> {
     /// The columns of one topic instance (every subscription of that name and `multi_id`,
-    /// rows in file order); `None` if the log has no such instance or its format cannot be
-    /// read.
-    pub fn columns(&self, topic: &str, multi_id: u8) -> Option<Columns> {
+    /// rows in file order), or why there are none: no such topic (with the closest names
+    /// the log has), no such instance, or a format that cannot be read.
+    ///
+    /// ```
+    /// # use ulog_runtime::{Log, ULog, Writer, WriterOptions};
+    /// # #[derive(ULog)] struct Battery { timestamp: u64, voltage_v: f32 }
+    /// # let mut w = Writer::new(Vec::new(), WriterOptions::default())?;
+    /// # let sub = w.topic::<Battery>(0)?;
+    /// # w.write(&sub, &Battery { timestamp: 1, voltage_v: 16.0 })?;
+    /// # let log = Log::from_vec(w.into_inner())?;
+    /// let err = log.columns("batery", 0).unwrap_err();
+    /// assert_eq!(err.to_string(), "the log has no topic `batery`; did you mean `battery`?");
+    /// let battery = log.columns("battery", 0)?;
+    /// // `as_float` gives a `float` column's values as stored; `to_f64` converts any type.
+    /// assert_eq!(battery.get("voltage_v").unwrap().as_float(), Some(&[16.0f32][..]));
+    /// assert_eq!(battery.get("voltage_v").unwrap().to_f64(), Some(vec![16.0]));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn columns(&self, topic: &str, multi_id: u8) -> Result<Columns, ColumnsError> {
         let subs = self.instance(topic, multi_id);
-        let spec = ColumnSpec::of(self.metadata().schema(), subs.first()?.format()?)?;
+        let Some(first) = subs.first() else {
+            let named: Vec<&Subscription> = self
+                .subscriptions()
+                .iter()
+                .filter(|s| s.name == topic)
+                .collect();
+            if named.is_empty() {
+                let names: std::collections::BTreeSet<&str> = self
+                    .subscriptions()
+                    .iter()
+                    .map(|s| s.name.as_str())
+                    .collect();
+                return Err(ColumnsError::NoSuchTopic {
+                    topic: topic.to_owned(),
+                    suggestions: crate::schema::closest_names(topic, names.into_iter()),
+                });
+            }
+            if named.iter().any(|s| s.multi_id == multi_id) {
+                return Err(ColumnsError::Unreadable {
+                    topic: topic.to_owned(),
+                    multi_id,
+                });
+            }
+            let mut available: Vec<u8> = named.iter().map(|s| s.multi_id).collect();
+            available.sort_unstable();
+            available.dedup();
+            return Err(ColumnsError::NoInstance {
+                topic: topic.to_owned(),
+                multi_id,
+                available,
+            });
+        };
+        let unreadable = || ColumnsError::Unreadable {
+            topic: topic.to_owned(),
+            multi_id,
+        };
+        let id = first.format().ok_or_else(unreadable)?;
+        let spec = ColumnSpec::of(self.metadata().schema(), id).ok_or_else(unreadable)?;
         let rows = subs.iter().map(|s| self.rows(s).len()).sum();
         let mut builder = ColumnBuilder::with_capacity(spec, rows);
         for row in self.instance_rows(&subs) {
             builder.push(row.data, row.timestamp);
         }
-        Some(builder.take())
+        Ok(builder.take())
     }
 
     /// The subscriptions of one topic instance whose format can be read, in file order.

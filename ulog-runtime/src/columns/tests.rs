@@ -86,12 +86,15 @@ fn rows_fill_typed_columns_in_batches() {
     assert!(!b.push(&[0; 10], 30), "too short: nothing added");
     let cols = b.take();
     assert_eq!(cols.rows(), 2);
-    assert_eq!(cols.get("timestamp").unwrap().as_u64(), Some(&[10, 20][..]));
-    let q0 = cols.get("q[0]").unwrap().as_f32().unwrap();
-    assert_eq!((q0[0], q0[1].is_nan()), (1.5, true));
-    assert_eq!(cols.get("e[1].a").unwrap().as_i16(), Some(&[4, 6][..]));
     assert_eq!(
-        cols.get("e[0].b").unwrap().as_f64(),
+        cols.get("timestamp").unwrap().as_uint64(),
+        Some(&[10, 20][..])
+    );
+    let q0 = cols.get("q[0]").unwrap().as_float().unwrap();
+    assert_eq!((q0[0], q0[1].is_nan()), (1.5, true));
+    assert_eq!(cols.get("e[1].a").unwrap().as_int16(), Some(&[4, 6][..]));
+    assert_eq!(
+        cols.get("e[0].b").unwrap().as_double(),
         Some(&[0.25, -1.0][..])
     );
     assert_eq!(
@@ -147,10 +150,20 @@ fn a_log_gives_the_columns_of_an_instance_with_unwrapped_timestamps() {
     let cols = log.columns("t", 0).unwrap();
     assert_eq!(cols.defs()[0].ulog_type, "uint16_t");
     assert_eq!(
-        cols.get("timestamp").unwrap().as_u64(),
+        cols.get("timestamp").unwrap().as_uint64(),
         Some(&[65_000, 65_636][..])
     );
-    assert_eq!(cols.get("x").unwrap().as_f32(), Some(&[1.0, 2.0][..]));
-    assert!(log.columns("t", 1).is_none());
-    assert!(log.columns("nope", 0).is_none());
+    assert_eq!(cols.get("x").unwrap().as_float(), Some(&[1.0, 2.0][..]));
+    assert_eq!(
+        log.columns("t", 1).unwrap_err().to_string(),
+        "`t` has no instance 1 (instances: [0])"
+    );
+    assert_eq!(
+        log.columns("nope", 0).unwrap_err().to_string(),
+        "the log has no topic `nope`"
+    );
+    assert_eq!(
+        log.columns("tt", 0).unwrap_err().to_string(),
+        "the log has no topic `tt`; did you mean `t`?"
+    );
 }

@@ -177,6 +177,11 @@ impl LogLevel {
             .copied()
     }
 
+    /// The level byte PX4 writes: the ASCII digit `'0'..='7'`.
+    pub fn byte(self) -> u8 {
+        b'0' + self as u8
+    }
+
     /// The name pyulog prints: `EMERGENCY`, `ALERT`, `CRITICAL`, `ERROR`, `WARNING`, `NOTICE`,
     /// `INFO`, `DEBUG`.
     pub fn name(self) -> &'static str {
@@ -190,6 +195,13 @@ impl LogLevel {
             LogLevel::Info => "INFO",
             LogLevel::Debug => "DEBUG",
         }
+    }
+}
+
+/// The byte PX4 writes ([`LogLevel::byte`]): what [`Writer::log`](crate::Writer::log) takes.
+impl From<LogLevel> for u8 {
+    fn from(level: LogLevel) -> u8 {
+        level.byte()
     }
 }
 

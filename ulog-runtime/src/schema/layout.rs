@@ -220,7 +220,7 @@ impl Schema {
     /// The names of formats closest to `name` (at most 3, closest first), for an error about
     /// a name the schema lacks.
     pub fn suggest(&self, name: &str) -> Vec<String> {
-        super::suggest::closest(name, self.formats.iter().map(|f| f.name.as_str()))
+        super::suggest::closest_names(name, self.formats.iter().map(|f| f.name.as_str()))
     }
 
     /// The layout of a format, resolving it (and its nested types) if not done yet.

@@ -16,3 +16,4 @@ pub use layout::{
     FieldKind, FieldLayout, FormatId, Layout, LayoutError, MAX_DATA_SIZE, Redefinition, Schema,
 };
 pub use primitive::Primitive;
+pub use suggest::{closest_names, did_you_mean};

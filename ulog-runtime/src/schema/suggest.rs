@@ -1,8 +1,17 @@
 //! Names close to one that does not exist, for errors that suggest what was meant.
 
-/// The names closest to `name` by edit distance (and those containing it), at most 3: the
-/// suggestions of an error about a name that does not exist.
-pub(crate) fn closest<'a>(name: &str, candidates: impl Iterator<Item = &'a str>) -> Vec<String> {
+/// The names closest to `name` by edit distance (and those containing it), at most 3,
+/// closest first: the suggestions of an error about a name that does not exist.
+///
+/// ```
+/// use ulog_runtime::schema::{closest_names, did_you_mean};
+/// let names = ["vehicle_status", "battery_status", "sensor_combined"];
+/// let close = closest_names("vehicle_statuss", names.into_iter());
+/// assert_eq!(close, ["vehicle_status"]);
+/// assert_eq!(did_you_mean(&close), "; did you mean `vehicle_status`?");
+/// assert_eq!(did_you_mean(&[]), "");
+/// ```
+pub fn closest_names<'a>(name: &str, candidates: impl Iterator<Item = &'a str>) -> Vec<String> {
     let limit = (name.chars().count() / 3).max(2);
     let mut scored: Vec<(usize, &str)> = candidates
         .filter_map(|c| {
@@ -18,6 +27,19 @@ pub(crate) fn closest<'a>(name: &str, candidates: impl Iterator<Item = &'a str>)
         .take(3)
         .map(|(_, c)| c.to_owned())
         .collect()
+}
+
+/// `; did you mean `a`, `b` or `c`?` for suggestions ([`closest_names`]), or nothing.
+pub fn did_you_mean(suggestions: &[String]) -> String {
+    match suggestions {
+        [] => String::new(),
+        [one] => format!("; did you mean `{one}`?"),
+        many => {
+            let quoted: Vec<String> = many.iter().map(|s| format!("`{s}`")).collect();
+            let (last, rest) = quoted.split_last().expect("many");
+            format!("; did you mean {} or {last}?", rest.join(", "))
+        }
+    }
 }
 
 /// Levenshtein distance over characters.
@@ -51,10 +73,10 @@ mod tests {
             "vehicle_status_flags",
         ];
         assert_eq!(
-            closest("vehicle_statu", names.into_iter()),
+            closest_names("vehicle_statu", names.into_iter()),
             ["vehicle_status", "vehicle_status_flags"]
         );
         assert_eq!(edit_distance("kitten", "sitting"), 3);
-        assert!(closest("zzzzzz", names.into_iter()).is_empty());
+        assert!(closest_names("zzzzzz", names.into_iter()).is_empty());
     }
 }

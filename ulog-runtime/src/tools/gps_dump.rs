@@ -51,8 +51,8 @@ pub fn gps_dump(log: &Log<'_>, instance: u8) -> Result<GpsDump, GpsDumpError> {
         .ok_or(GpsDumpError::NoGpsDump)?;
     let cols = log
         .columns("gps_dump", first.multi_id)
-        .ok_or(GpsDumpError::NoGpsDump)?;
-    let bytes = |name: &str| cols.get(name).and_then(ColumnValues::as_u8);
+        .map_err(|_| GpsDumpError::NoGpsDump)?;
+    let bytes = |name: &str| cols.get(name).and_then(ColumnValues::as_uint8);
     let (Some(len), Some(_)) = (bytes("len"), bytes("data[0]")) else {
         return Err(GpsDumpError::WrongFormat);
     };

@@ -96,11 +96,11 @@ pub fn kml(log: &Log<'_>, options: &KmlOptions) -> Result<String, KmlError> {
 /// each row whose value differs from the previous one), then `(last_timestamp, -1)`; empty
 /// without `vehicle_status` or its `nav_state`.
 fn flight_modes(log: &Log<'_>, last_timestamp: u64) -> Vec<(u64, i64)> {
-    let Some(status) = log.columns("vehicle_status", 0) else {
+    let Ok(status) = log.columns("vehicle_status", 0) else {
         return Vec::new();
     };
     let (Some(t), Some(x)) = (
-        status.get("timestamp").and_then(ColumnValues::as_u64),
+        status.get("timestamp").and_then(ColumnValues::as_uint64),
         status.get("nav_state").and_then(ints),
     ) else {
         return Vec::new();
@@ -169,6 +169,7 @@ fn track(
 ) -> Result<(), KmlError> {
     let cols = log
         .columns(topic, 0)
+        .ok()
         .filter(|c| c.rows() > 0)
         .ok_or_else(|| KmlError::NoTopic(topic.to_owned()))?;
     let mut lon = floats(required(&cols, topic, "lon")?);
@@ -176,7 +177,7 @@ fn track(
     let mut alt = floats(required(&cols, topic, "alt")?);
     let mut t: Vec<u64> = cols
         .get("timestamp")
-        .and_then(ColumnValues::as_u64)
+        .and_then(ColumnValues::as_uint64)
         .unwrap_or_default()
         .to_vec();
     if let Some((_, fix)) = field(&cols, "fix_type") {
@@ -226,7 +227,7 @@ fn track(
 
 /// A placemark per camera trigger of instance 0 of `topic`.
 fn triggers(log: &Log<'_>, topic: &str, doc: &mut Document) -> Result<(), KmlError> {
-    let Some(cols) = log.columns(topic, 0).filter(|c| c.rows() > 0) else {
+    let Some(cols) = log.columns(topic, 0).ok().filter(|c| c.rows() > 0) else {
         return Ok(());
     };
     let lon = floats(required(&cols, topic, "lon")?);

@@ -7,7 +7,7 @@ use std::marker::PhantomData;
 use super::widen::{FloatLoader, IntLoader, loaders, widens};
 use super::{Topic, TypedField, TypedFormat, TypedKind};
 use crate::read::Row;
-use crate::schema::{FieldKind, FormatId, LayoutError, Schema};
+use crate::schema::{Difference, FieldKind, FormatId, LayoutError, Schema, did_you_mean};
 
 /// Where each field of a struct lives in a file's rows: made once by the runtime check, then
 /// used for every row (offset reads only).
@@ -167,19 +167,31 @@ fn check_format(
         });
         return None;
     };
+    // Exact mode: every difference of this level is said once, as a difference of the
+    // formats, not again per field below.
+    let mut exact_differs = false;
     if tf.exact {
         let file = schema.format(id);
         // The topic may be read under another name (`check_as`): compare the fields.
         let rust = tf.to_format_as(&file.name);
         if *file != rust {
-            out.push(Mismatch {
-                path: prefix.trim_end_matches('.').to_owned(),
+            exact_differs = true;
+            let path = prefix.trim_end_matches('.');
+            let mut differences = crate::schema::diff(file, &rust);
+            if differences.is_empty() {
+                // Only the names of padding fields differ, which `diff` does not compare.
+                differences.push(Difference::Padding {
+                    first: padding_names(file),
+                    second: padding_names(&rust),
+                });
+            }
+            out.extend(differences.into_iter().map(|difference| Mismatch {
+                path: path.to_owned(),
                 kind: MismatchKind::NotExact {
-                    file: file.to_string(),
-                    rust: rust.to_string(),
+                    difference,
                     rust_struct: tf.rust_type,
                 },
-            });
+            }));
         }
     }
     let mut fields = Vec::with_capacity(tf.fields.len());
@@ -194,7 +206,7 @@ fn check_format(
             .iter()
             .find(|f| !f.padding && f.name == field.name)
         else {
-            if !field.optional {
+            if !field.optional && !exact_differs {
                 out.push(Mismatch {
                     path,
                     kind: MismatchKind::Missing {
@@ -206,6 +218,14 @@ fn check_format(
             continue;
         };
         let widen = field.widen && !tf.exact;
+        // Whether `#[ulog(widen)]` would make the field fit (worth saying when it is not set).
+        let would_widen = !field.widen
+            && !tf.exact
+            && file_field.array_len == field.array_len
+            && matches!(
+                (field.kind, file_field.kind),
+                (TypedKind::Primitive(a), FieldKind::Primitive(b)) if widens(b, a)
+            );
         let type_mismatch = || Mismatch {
             path: path.clone(),
             kind: MismatchKind::Type {
@@ -213,10 +233,13 @@ fn check_format(
                 rust: field.rust_type.to_owned(),
                 rust_struct: tf.rust_type,
                 widen,
+                would_widen,
             },
         };
         if file_field.array_len != field.array_len {
-            out.push(type_mismatch());
+            if !exact_differs {
+                out.push(type_mismatch());
+            }
             fields.push(FieldPlan::ABSENT);
             continue;
         }
@@ -240,7 +263,9 @@ fn check_format(
                 )?))
             }
             _ => {
-                out.push(type_mismatch());
+                if !exact_differs {
+                    out.push(type_mismatch());
+                }
                 fields.push(FieldPlan::ABSENT);
                 continue;
             }
@@ -257,6 +282,16 @@ fn check_format(
     Some(DecodePlan {
         fields: fields.into_boxed_slice(),
     })
+}
+
+/// The names of a format's padding fields.
+fn padding_names(format: &crate::schema::Format) -> Vec<String> {
+    format
+        .fields
+        .iter()
+        .filter(|f| f.is_padding())
+        .map(|f| f.name.clone())
+        .collect()
 }
 
 /// A file field's type as a format string spells it: `int32_t`, `float[4]`, `esc_report[8]`.
@@ -296,18 +331,21 @@ pub enum MismatchKind {
         /// Whether the field widens (`#[ulog(widen)]`): then the file's type is one it
         /// cannot hold every value of.
         widen: bool,
+        /// Whether it would fit with `#[ulog(widen)]`, which it lacks: the struct's type
+        /// holds every value of the file's.
+        would_widen: bool,
     },
     /// A field the struct requires and the file lacks.
     Missing {
         /// The struct that has the field.
         rust_struct: &'static str,
     },
-    /// Exact mode: the file's format is not identical to the struct's.
+    /// Exact mode: the file's format is not identical to the struct's; one mismatch per
+    /// difference ([`schema::diff`](crate::schema::diff) of the file's format, first, and
+    /// the struct's).
     NotExact {
-        /// The file's format, printed.
-        file: String,
-        /// The struct's format, printed.
-        rust: String,
+        /// What differs.
+        difference: Difference,
         /// The struct.
         rust_struct: &'static str,
     },
@@ -327,6 +365,7 @@ impl fmt::Display for Mismatch {
                 rust,
                 rust_struct,
                 widen,
+                would_widen,
             } => {
                 write!(
                     f,
@@ -334,6 +373,13 @@ impl fmt::Display for Mismatch {
                 )?;
                 if *widen {
                     f.write_str(" (not a lossless widening)")?;
+                }
+                if *would_widen {
+                    write!(
+                        f,
+                        " (every {file} value fits in {rust}: `#[ulog(widen)]` on the field \
+                         accepts it)"
+                    )?;
                 }
                 Ok(())
             }
@@ -343,8 +389,7 @@ impl fmt::Display for Mismatch {
                  (make it an `Option` to accept files without it)"
             ),
             MismatchKind::NotExact {
-                file,
-                rust,
+                difference,
                 rust_struct,
             } => {
                 let at = if path.is_empty() {
@@ -352,11 +397,8 @@ impl fmt::Display for Mismatch {
                 } else {
                     format!("{path}: ")
                 };
-                write!(
-                    f,
-                    "{at}exact mode: the file's format `{file}` differs from struct \
-                     {rust_struct}'s `{rust}`"
-                )
+                let text = difference.describe("the file", &format!("struct {rust_struct}"));
+                write!(f, "{at}exact mode: {text}")
             }
             MismatchKind::Invalid { type_name } => write!(
                 f,
@@ -432,19 +474,6 @@ fn mismatch_lines(topic: &str, rust_type: &str, mismatches: &[Mismatch]) -> Stri
                 text.push_str(&m.to_string());
             }
             text
-        }
-    }
-}
-
-/// `; did you mean `a` or `b`?`, or nothing.
-fn did_you_mean(suggestions: &[String]) -> String {
-    match suggestions {
-        [] => String::new(),
-        [one] => format!("; did you mean `{one}`?"),
-        many => {
-            let quoted: Vec<String> = many.iter().map(|s| format!("`{s}`")).collect();
-            let (last, rest) = quoted.split_last().expect("many");
-            format!("; did you mean {} or {last}?", rest.join(", "))
         }
     }
 }

@@ -10,12 +10,23 @@ use crate::schema::Primitive;
 /// A `char[N]` field: text of at most `N` bytes, zero-filled after its end (ULog strings have
 /// no terminator when they fill the array).
 ///
+/// Made from text with `From<&str>`, which keeps what fits, cut at a character boundary, as
+/// PX4 copies a string into a `char[N]` field; to refuse text that does not fit, use
+/// `FromStr` (`"auto".parse()`, an error) or [`Chars::new`] (`None`). It prints as its text.
+///
 /// ```
 /// use ulog_runtime::Chars;
 /// let name: Chars<8> = Chars::new("rover").unwrap();
 /// assert_eq!(name.as_str(), Ok("rover"));
 /// assert_eq!(name.as_bytes(), b"rover\0\0\0");
 /// assert!(Chars::<2>::new("rover").is_none());
+///
+/// let mode: Chars<8> = "auto".parse()?;
+/// assert_eq!(mode.to_string(), "auto");
+/// let checked = "mission".parse::<Chars<4>>();
+/// assert_eq!(checked.unwrap_err().to_string(), "7 bytes of text do not fit in char[4]");
+/// assert_eq!(Chars::<4>::from("mission").to_string(), "miss");
+/// # Ok::<(), ulog_runtime::typed::CharsTooLong>(())
 /// ```
 #[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct Chars<const N: usize>(pub [u8; N]);
@@ -49,6 +60,38 @@ impl<const N: usize> Chars<N> {
     /// The text up to the first zero byte, invalid UTF-8 replaced.
     pub fn to_string_lossy(&self) -> std::borrow::Cow<'_, str> {
         String::from_utf8_lossy(self.text_bytes())
+    }
+}
+
+/// Text too long for a `char[N]` field ([`Chars`]'s `FromStr`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error("{len} bytes of text do not fit in char[{capacity}]")]
+pub struct CharsTooLong {
+    /// Bytes of the text.
+    pub len: usize,
+    /// `N`.
+    pub capacity: usize,
+}
+
+impl<const N: usize> std::str::FromStr for Chars<N> {
+    type Err = CharsTooLong;
+    fn from_str(text: &str) -> Result<Chars<N>, CharsTooLong> {
+        Chars::new(text).ok_or(CharsTooLong {
+            len: text.len(),
+            capacity: N,
+        })
+    }
+}
+
+/// The text's first `N` bytes at most, cut at a character boundary (as PX4 fills a
+/// `char[N]` field); `FromStr` refuses text that does not fit instead.
+impl<const N: usize> From<&str> for Chars<N> {
+    fn from(text: &str) -> Chars<N> {
+        let mut end = text.len().min(N);
+        while !text.is_char_boundary(end) {
+            end -= 1;
+        }
+        Chars::new(&text[..end]).expect("cut to fit")
     }
 }
 

@@ -99,7 +99,7 @@ mod view;
 mod widen;
 
 pub use check::{DecodePlan, FieldPlan, Mismatch, MismatchKind, TypedDecoder, TypedError};
-pub use field::{Char, Chars, DerivedElement, Element, FieldValue, Padding};
+pub use field::{Char, Chars, CharsTooLong, DerivedElement, Element, FieldValue, Padding};
 pub use view::{TopicRows, TypedRows, TypedTopic};
 pub use widen::{common_type, widens};
 

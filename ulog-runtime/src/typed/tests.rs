@@ -215,19 +215,37 @@ struct ExactSensor {
 fn exact_mode_refuses_any_difference() {
     let same = schema(&["sensor:uint64_t timestamp;float x;uint8_t[4] _padding0;"]);
     assert!(TypedDecoder::<ExactSensor>::new(&same).is_ok());
-    for other in [
-        "sensor:float x;uint64_t timestamp;uint8_t[4] _padding0;",
-        "sensor:uint64_t timestamp;float x;",
-        "sensor:uint64_t timestamp;float x;uint8_t[4] _padding0;float y;",
+    // Each difference named, field by field, not the two formats printed whole.
+    for (other, expected) in [
+        (
+            "sensor:float x;uint64_t timestamp;uint8_t[4] _padding0;",
+            "sensor: 2 differences between the file and struct ExactSensor:\n  \
+             exact mode: fields in another order: x timestamp in the file, timestamp x in \
+             struct ExactSensor\n  \
+             exact mode: padding differs: uint8_t[4] after `timestamp` in the file; \
+             uint8_t[4] after `x` in struct ExactSensor",
+        ),
+        (
+            "sensor:uint64_t timestamp;float x;",
+            "sensor: exact mode: padding differs: none in the file; uint8_t[4] after `x` in \
+             struct ExactSensor",
+        ),
+        (
+            "sensor:uint64_t timestamp;float x;uint8_t[4] _padding0;float y;",
+            "sensor: exact mode: field `float y` is in the file, not in struct ExactSensor",
+        ),
+        (
+            "sensor:uint64_t timestamp;double x;uint8_t[4] _padding0;",
+            "sensor: exact mode: field `x` is double in the file, float in struct ExactSensor",
+        ),
+        (
+            "sensor:uint64_t timestamp;float x;uint8_t[4] _padding1;",
+            "sensor: exact mode: padding differs: _padding1 in the file; _padding0 in struct \
+             ExactSensor",
+        ),
     ] {
         let err = TypedDecoder::<ExactSensor>::new(&schema(&[other])).unwrap_err();
-        assert_eq!(
-            err.to_string(),
-            format!(
-                "sensor: exact mode: the file's format `{other}` differs from struct \
-                 ExactSensor's `sensor:uint64_t timestamp;float x;uint8_t[4] _padding0;`"
-            )
-        );
+        assert_eq!(err.to_string(), expected, "{other}");
     }
 }
 
@@ -521,7 +539,8 @@ fn lossy_widening_is_refused_with_every_path() {
     let s = schema(&["battery_status:uint64_t timestamp;uint8_t cell_count;float voltage_v;"]);
     assert_eq!(
         TypedDecoder::<Strict>::new(&s).unwrap_err().to_string(),
-        "battery_status: voltage_v is float in the file, f64 in struct Strict"
+        "battery_status: voltage_v is float in the file, f64 in struct Strict (every float \
+         value fits in f64: `#[ulog(widen)]` on the field accepts it)"
     );
     // Writing a widened type writes its own, wider format.
     let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
@@ -654,4 +673,18 @@ fn one_type_reads_and_writes_every_topic_of_its_layout() {
             .to_string(),
         "estimator_attitude: q is float[3] in the file, [f32; 4] in struct VehicleAttitude"
     );
+}
+
+#[test]
+fn chars_from_text_checked_or_cut_at_a_character() {
+    use std::str::FromStr;
+    let exact: Chars<4> = "auto".parse().unwrap();
+    assert_eq!(exact.as_bytes(), b"auto");
+    assert_eq!(Chars::<4>::from_str("au").unwrap().as_bytes(), b"au\0\0");
+    let err = Chars::<4>::from_str("abcé").unwrap_err();
+    assert_eq!((err.len, err.capacity), (5, 4));
+    // `From` keeps what fits and never splits a character: "é" is two bytes.
+    assert_eq!(Chars::<4>::from("abcé").as_bytes(), b"abc\0");
+    assert_eq!(Chars::<5>::from("abcé").as_str(), Ok("abcé"));
+    assert_eq!(format!("{}", Chars::<8>::from("rover")), "rover");
 }

@@ -551,26 +551,44 @@ impl<W: Write> Writer<W> {
         })
     }
 
-    /// Writes a logged string (`L`); `level` is the ASCII digit PX4 writes (`b'6'` for info).
-    pub fn log(&mut self, level: u8, timestamp: u64, text: &str) -> Result<(), WriteError> {
+    /// Writes a logged string (`L`): `level` a [`LogLevel`](crate::read::LogLevel), written
+    /// as the ASCII digit PX4 writes (`LogLevel::Info` is `b'6'`), or the raw byte of another
+    /// writer's level.
+    ///
+    /// ```
+    /// use ulog_runtime::{LogLevel, Writer, WriterOptions};
+    /// let mut w = Writer::new(Vec::new(), WriterOptions::default())?;
+    /// w.log(LogLevel::Warning, 1_000, "low battery")?;
+    /// w.log(b'6', 2_000, "a raw level byte")?;
+    /// let log = ulog_runtime::Log::from_vec(w.into_inner())?;
+    /// let levels: Vec<_> = log.logged_messages().iter().map(|m| m.level()).collect();
+    /// assert_eq!(levels, [Some(LogLevel::Warning), Some(LogLevel::Info)]);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn log(
+        &mut self,
+        level: impl Into<u8>,
+        timestamp: u64,
+        text: &str,
+    ) -> Result<(), WriteError> {
         self.put_in_data(Message::Logging {
-            level,
+            level: level.into(),
             tag: None,
             timestamp,
             text: text.as_bytes(),
         })
     }
 
-    /// Writes a tagged logged string (`C`).
+    /// Writes a tagged logged string (`C`); `level` as for [`Writer::log`].
     pub fn log_tagged(
         &mut self,
-        level: u8,
+        level: impl Into<u8>,
         tag: u16,
         timestamp: u64,
         text: &str,
     ) -> Result<(), WriteError> {
         self.put_in_data(Message::Logging {
-            level,
+            level: level.into(),
             tag: Some(tag),
             timestamp,
             text: text.as_bytes(),

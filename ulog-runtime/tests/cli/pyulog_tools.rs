@@ -555,3 +555,59 @@ fn kml_with_camera_triggers_and_flight_modes_equals_ulog2kml() {
     assert_eq!(a.matches("<name>Camera Trigger").count(), 4);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn messages_json_says_pyulogs_warnings_as_warnings_beside_the_json() {
+    use ulog_runtime::{LogLevel, Value, Writer, WriterOptions};
+    // A PX4 log with an event row and no events metadata: pyulog warns that it has no
+    // event parser, then lists the logged strings.
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    w.info("sys_name", &Value::String("PX4".into())).unwrap();
+    w.format("event:uint64_t timestamp;uint32_t id;uint16_t event_sequence;uint8_t[25] arguments;uint8_t log_levels;")
+        .unwrap();
+    let sub = w.subscribe("event", 0).unwrap();
+    let mut row = 1_000u64.to_le_bytes().to_vec();
+    row.extend_from_slice(&((1u32 << 24) | 5).to_le_bytes());
+    row.extend_from_slice(&1u16.to_le_bytes());
+    row.extend_from_slice(&[0; 25]);
+    row.push(0x66);
+    w.data(sub, &row).unwrap();
+    w.log(LogLevel::Warning, 2_000, "low battery").unwrap();
+    let dir = temp_dir("messages-warning");
+    let path = dir.join("no_metadata.ulg");
+    std::fs::write(&path, w.into_inner()).unwrap();
+    let file = path.to_str().unwrap();
+
+    let text = stdout(&["messages", file]);
+    assert!(text.starts_with("Failed to get event parser: "), "{text}");
+    assert!(
+        text.ends_with("0:00:00.002 WARNING: low battery\n"),
+        "{text}"
+    );
+    if let Some(theirs) = pyulog_tool("messages", &[file], None) {
+        // The same lines; the reason differs by design (pyulog tried to download the
+        // metadata, which an offline reader never does).
+        let theirs = String::from_utf8_lossy(&theirs.stdout).into_owned();
+        let (ours_first, ours_rest) = text.split_once('\n').unwrap();
+        let (their_first, their_rest) = theirs.split_once('\n').unwrap();
+        assert_eq!(ours_rest, their_rest, "as ulog_messages");
+        assert!(their_first.starts_with("Failed to get event parser: "));
+        assert!(ours_first.contains("no events metadata"), "{ours_first}");
+    }
+    let json = ulog(&["messages", "--json", file]);
+    assert!(json.status.success(), "a warning, not an error");
+    let out = String::from_utf8(json.stdout).unwrap();
+    let lines: Vec<serde_json::Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 1, "only JSON on stdout: {out}");
+    let err = String::from_utf8(json.stderr).unwrap();
+    assert!(
+        err.starts_with(&format!(
+            "ulog: warning: {file}: Failed to get event parser: "
+        )),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

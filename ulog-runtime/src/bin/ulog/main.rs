@@ -225,8 +225,7 @@ pub(crate) fn did_you_mean(names: &[String]) -> String {
     if names.is_empty() {
         return " (`ulog info FILE` lists its topics)".to_owned();
     }
-    let names: Vec<String> = names.iter().map(|n| format!("`{n}`")).collect();
-    format!("; did you mean {}?", names.join(" or "))
+    ulog_runtime::schema::did_you_mean(names)
 }
 
 /// Says on stderr what the export left out, so that nothing is skipped silently.

@@ -18,7 +18,8 @@ pub(crate) struct Args {
     /// error.
     #[arg(short, long)]
     ignore: bool,
-    /// JSON Lines, one object per message with every field (pyulog's warnings go to stderr).
+    /// JSON Lines, one object per message with every field (pyulog's warnings go to stderr
+    /// as `ulog: warning: FILE: ...`).
     #[arg(long)]
     json: bool,
 }
@@ -31,8 +32,10 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         eprintln!("ulog: {}: {note}", args.file.display());
     }
     if args.json {
+        // pyulog prints its warnings among the messages; beside JSON on stdout they go to
+        // stderr, marked as warnings (the exit code stays 0, as pyulog's).
         for w in &m.warnings {
-            eprintln!("ulog: {}: {w}", args.file.display());
+            eprintln!("ulog: warning: {}: {w}", args.file.display());
         }
         for line in &m.lines {
             serde_json::to_writer(&mut *out, &JsonLine::of(line))?;

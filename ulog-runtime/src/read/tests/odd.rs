@@ -246,7 +246,7 @@ fn a_msg_id_given_to_another_topic_keeps_each_row_with_its_subscription() {
     let names: Vec<String> = log.data().map(|r| r.subscription.name.clone()).collect();
     assert_eq!(names, ["a", "a", "b"]);
     assert_eq!(
-        log.columns("b", 0).unwrap().get("z").unwrap().as_u16(),
+        log.columns("b", 0).unwrap().get("z").unwrap().as_uint16(),
         Some(&[6][..])
     );
     assert_eq!(
