@@ -115,3 +115,55 @@ fn primitive_names_cover_the_corpus() {
         }
     }
 }
+
+#[test]
+fn a_key_with_a_space_is_compared_as_pyulog_names_it() {
+    use ulog_runtime::read::{FileHeader, FlagBits, KeyValue, Message};
+    // A non-PX4 writer's info keys with spaces in their names.
+    let mut bytes = FileHeader {
+        version: 1,
+        start_timestamp: 0,
+    }
+    .to_bytes()
+    .to_vec();
+    let put = |m: Message<'_>, b: &mut Vec<u8>| m.encode(b).unwrap();
+    put(Message::FlagBits(FlagBits::default()), &mut bytes);
+    for (key, value) in [
+        (&b"char[11] Build Date"[..], &b"Dec  1 2026"[..]),
+        (b"char[8] Build Time", b"22:00:00"),
+        (b"char[3] sys_name", b"PX4"),
+    ] {
+        put(Message::Info(KeyValue { key, value }), &mut bytes);
+    }
+    put(Message::Format(b"t:uint64_t timestamp;"), &mut bytes);
+    put(
+        Message::Subscribe {
+            multi_id: 0,
+            msg_id: 0,
+            name: b"t",
+        },
+        &mut bytes,
+    );
+    put(
+        Message::Data {
+            msg_id: 0,
+            data: &5u64.to_le_bytes(),
+        },
+        &mut bytes,
+    );
+    let dir = std::env::temp_dir().join(format!("ulog-key-space-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("build_date.ulg");
+    std::fs::write(&path, &bytes).unwrap();
+    let Some(o) = ulog_tests::pyulog_view(&path) else {
+        assert!(!ulog_tests::under_ci(), "under CI pyulog must be installed");
+        return;
+    };
+    // pyulog has `Build` (the later value) and `sys_name`; this reader the whole names.
+    let keys: Vec<&String> = o["pyulog"]["info"].as_object().unwrap().keys().collect();
+    assert_eq!(keys.len(), 2, "{keys:?}");
+    let log = Log::from_slice(&bytes).unwrap();
+    assert!(log.metadata().info().iter().any(|i| i.key == "Build Date"));
+    assert_eq!(check_file(&path, &o), Vec::<String>::new());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

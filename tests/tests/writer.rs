@@ -8,14 +8,13 @@
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use serde_json::Value as Json;
 use sha2::{Digest, Sha256};
 use ulog_runtime::read::{Event, Message, ParamValue, StreamReader};
 use ulog_runtime::write::{SubscriptionId, Writer, WriterOptions};
 use ulog_runtime::{Log, Scalar, Value};
-use ulog_tests::{check_file, corpus_dir, corpus_files, short_name, under_ci};
+use ulog_tests::{check_file, corpus_files, pyulog_view, short_name, under_ci};
 
 /// Writes `input` again through the writer, message by message in file order.
 fn rewrite(input: &[u8]) -> Vec<u8> {
@@ -275,22 +274,6 @@ fn sha256(bytes: &[u8]) -> String {
         .iter()
         .map(|b| format!("{b:02x}"))
         .collect()
-}
-
-/// pyulog's view of `path` through the corpus's `oracle.py`, if pyulog and the script are here.
-fn pyulog_view(path: &Path) -> Option<Json> {
-    let script = corpus_dir().join("oracle.py");
-    let ok = Command::new("python3")
-        .arg(&script)
-        .arg(path)
-        .output()
-        .ok()?
-        .status
-        .success();
-    if !ok {
-        return None;
-    }
-    ulog_tests::oracle(path)
 }
 
 #[test]

@@ -44,6 +44,7 @@ pub mod events;
 pub mod file_names;
 pub mod pytext;
 pub mod read;
+pub mod rewrite;
 pub mod schema;
 pub mod tools;
 pub mod typed;

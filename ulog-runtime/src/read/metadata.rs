@@ -881,6 +881,12 @@ impl Decoded {
     }
 }
 
+/// The name of the key of an `I`/`M`/`P`/`Q` message, as [`Info::key`] gives it (a key
+/// outside the grammar keeps its whole name).
+pub(crate) fn key_name(kv: KeyValue<'_>) -> String {
+    decode_key_value(kv).name
+}
+
 /// Decodes the key and value of an `I`/`M`/`P`/`Q` message, keeping what is there: a key
 /// outside the grammar keeps its whole name, a value that does not fit its type is typed
 /// as far as it fits (or kept as bytes), and each oddity is noted.

@@ -19,12 +19,12 @@ pub use message::{
     MESSAGE_HEADER_LEN, MalformedMessage, Message, MessageTooLarge, MessageType, SYNC_MAGIC,
     UtcTime,
 };
-pub(crate) use metadata::text_of;
 pub use metadata::{
     DefaultParameter, Dropout, Info, LogLevel, LoggedMessage, Metadata, MultiInfo, ParamValue,
     Parameter, ParameterChange, Subscription, VersionInfo,
 };
-pub use stream::{Event, StreamReader};
+pub(crate) use metadata::{key_name, text_of};
+pub use stream::{Event, RawMessage, StreamReader};
 pub use topics::{InstanceRows, Skipped, TopicSummary};
 
 use crate::error::{Diagnostic, DiagnosticKind, ReadError};

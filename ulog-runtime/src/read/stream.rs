@@ -74,6 +74,20 @@ pub struct StreamReader<R> {
     walker: Walker,
     /// A diagnostic to report before the next message (boxed: checked on every row).
     pending: Option<Box<Diagnostic>>,
+    /// The message behind the last event: its offset, type and the range of its payload in
+    /// `buf` (valid until the next read moves the window).
+    last: Option<(u64, u8, std::ops::Range<usize>)>,
+}
+
+/// One message as the file holds it ([`StreamReader::message`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RawMessage<'a> {
+    /// File offset of its header.
+    pub offset: u64,
+    /// Its type byte (`b'F'`, `b'D'`...).
+    pub ty: u8,
+    /// Its payload, the bytes after the 3-byte header.
+    pub payload: &'a [u8],
 }
 
 impl<R: Read> StreamReader<R> {
@@ -101,6 +115,35 @@ impl<R: Read> StreamReader<R> {
             eof: false,
             walker,
             pending,
+            last: None,
+        })
+    }
+
+    /// The message the last event of [`StreamReader::next_event`] came from, as the file
+    /// holds it (`None` after a diagnostic, which stands for no message, and before the
+    /// first event): what a tool that copies or rewrites messages writes back unchanged.
+    /// Call it once the event is no longer used (the event borrows the reader).
+    ///
+    /// ```no_run
+    /// # fn main() -> Result<(), ulog_runtime::ReadError> {
+    /// use ulog_runtime::{Event, StreamReader};
+    /// let file = std::io::BufReader::new(std::fs::File::open("flight.ulg")?);
+    /// let mut reader = StreamReader::new(file)?;
+    /// while let Some(event) = reader.next_event()? {
+    ///     let is_format = matches!(event, Event::Definition { ty: ulog_runtime::read::MessageType::Format, .. });
+    ///     if is_format {
+    ///         let raw = reader.message().expect("a message");
+    ///         println!("{}", String::from_utf8_lossy(raw.payload));
+    ///     }
+    /// }
+    /// # Ok(()) }
+    /// ```
+    pub fn message(&self) -> Option<RawMessage<'_>> {
+        let (offset, ty, range) = self.last.clone()?;
+        Some(RawMessage {
+            offset,
+            ty,
+            payload: &self.buf[range],
         })
     }
 
@@ -237,10 +280,17 @@ impl<R: Read> StreamReader<R> {
     pub fn next_event(&mut self) -> Result<Option<Event<'_>>, ReadError> {
         if self.pending.is_some() {
             let d = self.pending.take().expect("checked");
+            self.last = None;
             return Ok(Some(Event::Diagnostic(d)));
         }
         let (start, end) = (self.start, self.end);
         if let Some(row) = self.walker.fast_row(&self.buf[start..end], self.base) {
+            // The payload: the msg_id before the row's data.
+            self.last = Some((
+                row.offset,
+                b'D',
+                start + row.data.start - 2..start + row.data.end,
+            ));
             return Ok(Some(Event::Row(Row {
                 timestamp: row.timestamp,
                 offset: row.offset,
@@ -263,6 +313,16 @@ impl<R: Read> StreamReader<R> {
                     applied,
                     payload,
                 } => {
+                    self.last = match applied {
+                        Applied::Diagnostic(_) => None,
+                        _ => {
+                            let at = self.start
+                                + (offset - self.base) as usize
+                                + super::MESSAGE_HEADER_LEN;
+                            let ty = self.buf[at - 1];
+                            Some((offset, ty, at..at + payload.len()))
+                        }
+                    };
                     let event = match applied {
                         Applied::Nothing => {
                             let ty = window[(offset - self.base) as usize + 2];

@@ -638,7 +638,7 @@ impl<W: Write> Writer<W> {
 }
 
 /// The key text and value bytes of an info value.
-fn key_value(key: &str, value: &Value) -> Result<(String, Vec<u8>), WriteError> {
+pub(crate) fn key_value(key: &str, value: &Value) -> Result<(String, Vec<u8>), WriteError> {
     let invalid = |reason: &str| WriteError::InvalidValue {
         key: key.to_owned(),
         reason: reason.to_owned(),

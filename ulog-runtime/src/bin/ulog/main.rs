@@ -9,9 +9,11 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 use ulog_runtime::Log;
 
+mod anonymize;
 mod check_msg;
 mod codegen;
 mod csv;
+mod cut;
 mod gps_dump;
 mod info;
 mod json;
@@ -52,6 +54,10 @@ enum Command {
     Codegen(codegen::Args),
     /// Whether the `.msg` files of a folder make exactly a log's formats, and where not.
     CheckMsg(check_msg::Args),
+    /// A new log of a time window and some topics (`--start`, `--end`, `-m`, `--exclude`).
+    Cut(cut::Args),
+    /// A new log with positions moved, times shifted and identifiers removed.
+    Anonymize(anonymize::Args),
 }
 
 /// An error for the one line `ulog` prints: `ulog: PATH: message`.
@@ -149,7 +155,20 @@ fn run(command: Command, out: &mut impl Write) -> Result<(), Failure> {
         Command::GpsDump(args) => gps_dump::run(&args, out),
         Command::Codegen(args) => codegen::run(&args, out),
         Command::CheckMsg(args) => check_msg::run(&args, out),
+        Command::Cut(args) => cut::run(&args, out),
+        Command::Anonymize(args) => anonymize::run(&args, out),
     }
+}
+
+/// What `ulog cut` and `ulog anonymize` print: the new log, then the report.
+pub(crate) fn report_rewrite(
+    report: &ulog_runtime::rewrite::Report,
+    output: &Path,
+    out: &mut impl Write,
+) -> Result<(), Failure> {
+    writeln!(out, "{}", output.display())?;
+    write!(out, "{report}")?;
+    Ok(())
 }
 
 /// Opens a log, with plain messages for paths that are not readable files.
@@ -218,6 +237,58 @@ pub(crate) fn check_topics(log: &Log<'_>, path: &Path, topics: &[String]) -> Res
         )),
         None => Ok(()),
     }
+}
+
+/// Before any conversion, from each log's definitions section: a `-m` topic that no log
+/// defines is an error (naming the closest topics), as for every verb; one that only some
+/// logs lack is said on stderr for each of them (a fleet's logs need not share topics).
+/// Logs that cannot be read are left to the conversion to report.
+pub(crate) fn check_topics_in_files(files: &[PathBuf], topics: &[String]) -> Result<(), Failure> {
+    if topics.is_empty() {
+        return Ok(());
+    }
+    let definitions: Vec<_> = files
+        .iter()
+        .filter_map(|path| {
+            let file = std::io::BufReader::new(std::fs::File::open(path).ok()?);
+            Some((
+                path,
+                ulog_runtime::StreamReader::read_definitions(file).ok()?,
+            ))
+        })
+        .collect();
+    for topic in topics {
+        let lacking: Vec<_> = definitions
+            .iter()
+            .filter(|(_, meta)| meta.schema().get(topic).is_none())
+            .collect();
+        if lacking.is_empty() {
+            continue;
+        }
+        if lacking.len() == definitions.len() {
+            let mut names: Vec<String> = Vec::new();
+            for (_, meta) in &definitions {
+                for name in meta.schema().suggest(topic) {
+                    if !names.contains(&name) {
+                        names.push(name);
+                    }
+                }
+            }
+            let hint = did_you_mean(&names);
+            return Err(match files {
+                [path] => Failure::at(path, format!("no topic `{topic}` in this log{hint}")),
+                _ if definitions.len() < files.len() => Failure::exit(
+                    1,
+                    format!("no topic `{topic}` in any of the logs that can be read{hint}"),
+                ),
+                _ => Failure::exit(1, format!("no topic `{topic}` in any of the logs{hint}")),
+            });
+        }
+        for (path, _) in lacking {
+            eprintln!("ulog: {}: no topic `{topic}` in this log", path.display());
+        }
+    }
+    Ok(())
 }
 
 /// `; did you mean `a` or `b`?`, or where to see the topics when no name is close.

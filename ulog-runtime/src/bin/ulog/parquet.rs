@@ -6,7 +6,6 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use ulog_runtime::StreamReader;
 use ulog_runtime::columns::Window;
 use ulog_runtime::columns::parquet::{Converter, Layout, ParquetOptions};
 
@@ -63,7 +62,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     options
         .properties(Vec::new())
         .map_err(|e| Failure::exit(2, format!("--zstd-level {}: {e}", args.zstd_level)))?;
-    check_topics(&args.files, &args.messages)?;
+    crate::check_topics_in_files(&args.files, &args.messages)?;
     let total: u64 = args
         .files
         .iter()
@@ -132,55 +131,6 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
             1,
             format!("{failed} of {} logs not converted", args.files.len()),
         ));
-    }
-    Ok(())
-}
-
-/// Before any conversion, from each log's definitions section: a `-m` topic that no log
-/// defines is an error (naming the closest topics), as for every verb; one that only some
-/// logs lack is said on stderr for each of them (a fleet's logs need not share topics).
-/// Logs that cannot be read are left to the conversion to report.
-fn check_topics(files: &[PathBuf], topics: &[String]) -> Result<(), Failure> {
-    if topics.is_empty() {
-        return Ok(());
-    }
-    let definitions: Vec<_> = files
-        .iter()
-        .filter_map(|path| {
-            let file = std::io::BufReader::new(std::fs::File::open(path).ok()?);
-            Some((path, StreamReader::read_definitions(file).ok()?))
-        })
-        .collect();
-    for topic in topics {
-        let lacking: Vec<_> = definitions
-            .iter()
-            .filter(|(_, meta)| meta.schema().get(topic).is_none())
-            .collect();
-        if lacking.is_empty() {
-            continue;
-        }
-        if lacking.len() == definitions.len() {
-            let mut names: Vec<String> = Vec::new();
-            for (_, meta) in &definitions {
-                for name in meta.schema().suggest(topic) {
-                    if !names.contains(&name) {
-                        names.push(name);
-                    }
-                }
-            }
-            let hint = crate::did_you_mean(&names);
-            return Err(match files {
-                [path] => Failure::at(path, format!("no topic `{topic}` in this log{hint}")),
-                _ if definitions.len() < files.len() => Failure::exit(
-                    1,
-                    format!("no topic `{topic}` in any of the logs that can be read{hint}"),
-                ),
-                _ => Failure::exit(1, format!("no topic `{topic}` in any of the logs{hint}")),
-            });
-        }
-        for (path, _) in lacking {
-            eprintln!("ulog: {}: no topic `{topic}` in this log", path.display());
-        }
     }
     Ok(())
 }

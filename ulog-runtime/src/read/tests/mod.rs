@@ -772,3 +772,46 @@ fn read_definitions_stops_at_the_data_section() {
     assert_eq!(meta.schema().formats().len(), 1);
     assert!(StreamReader::read_definitions(&b"not a log at all"[..]).is_err());
 }
+
+#[test]
+fn the_stream_gives_each_events_message_as_the_file_holds_it() {
+    let (mut f, _) = clean(25);
+    f.msg(Message::Logging {
+        level: b'6',
+        tag: None,
+        timestamp: 30,
+        text: b"bytes \xff kept",
+    });
+    // Damage (no message) between rows.
+    f.0.extend_from_slice(&[0xFF, 0x13, 0x00, 0x42]);
+    f.data(0, &row(31, 7));
+    struct Trickle<'a>(&'a [u8]);
+    impl std::io::Read for Trickle<'_> {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            let n = buf.len().min(7).min(self.0.len());
+            buf[..n].copy_from_slice(&self.0[..n]);
+            self.0 = &self.0[n..];
+            Ok(n)
+        }
+    }
+    let mut reader = StreamReader::new(Trickle(&f.0)).unwrap();
+    assert!(reader.message().is_none(), "nothing read yet");
+    let (mut messages, mut diagnostics) = (0, 0);
+    while let Some(e) = reader.next_event().unwrap() {
+        let diagnostic = matches!(e, Event::Diagnostic(_));
+        let raw = reader.message();
+        if diagnostic {
+            assert!(raw.is_none());
+            diagnostics += 1;
+            continue;
+        }
+        let raw = raw.unwrap();
+        let start = raw.offset as usize;
+        let size = usize::from(u16::from_le_bytes([f.0[start], f.0[start + 1]]));
+        assert_eq!(raw.ty, f.0[start + 2]);
+        assert_eq!(raw.payload, &f.0[start + 3..start + 3 + size]);
+        messages += 1;
+    }
+    // Flag bits, format, subscription, 3 syncs, 26 rows, the logged string.
+    assert_eq!((messages, diagnostics), (33, 1));
+}

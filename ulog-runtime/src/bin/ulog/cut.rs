@@ -1,0 +1,45 @@
+//! `ulog cut`: a log cut to a time window and filtered by topic, as a new log, over
+//! `rewrite::Rewrite`.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use ulog_runtime::columns::Window;
+use ulog_runtime::rewrite::Rewrite;
+
+use crate::Failure;
+
+/// `ulog cut FILE -o OUT [--start S] [--end E] [-m a,b] [--exclude c,d]`.
+#[derive(clap::Args)]
+pub(crate) struct Args {
+    /// The log.
+    file: PathBuf,
+    /// The new log (never the input).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Only what lies from this time on, in seconds of log time (as `ulog csv`).
+    #[arg(long, alias = "time_s")]
+    start: Option<f64>,
+    /// Only what lies before this time, in seconds.
+    #[arg(long, alias = "time_e")]
+    end: Option<f64>,
+    /// Only these topics (comma-separated).
+    #[arg(short, long, value_delimiter = ',')]
+    messages: Vec<String>,
+    /// Not these topics (comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    exclude: Vec<String>,
+}
+
+pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
+    crate::check_path(&args.file, false)?;
+    let topics: Vec<String> = args.messages.iter().chain(&args.exclude).cloned().collect();
+    crate::check_topics_in_files(std::slice::from_ref(&args.file), &topics)?;
+    let report = Rewrite::new()
+        .window(Window::seconds(args.start, args.end))
+        .topics(&args.messages)
+        .exclude(&args.exclude)
+        .run_file(&args.file, &args.output)
+        .map_err(|e| Failure::at(&args.file, e))?;
+    crate::report_rewrite(&report, &args.output, out)
+}
