@@ -5,7 +5,7 @@
 //! - no row is invented: every row returned starts where a row of the clean file starts (or
 //!   lies on damaged bytes, e.g. a copy spliced in);
 //! - the whole-file and the streaming reader agree;
-//! - over many damaged copies, at least 97% of the rows the damage did not touch come back.
+//! - over many damaged copies, at least 99.9% of the rows the damage did not touch come back.
 
 use std::ops::Range;
 use std::path::PathBuf;
@@ -334,7 +334,7 @@ impl SplitMix {
 }
 
 #[test]
-fn at_least_97_percent_of_untouched_rows_are_recovered() {
+fn at_least_99_9_percent_of_untouched_rows_are_recovered() {
     let cleans = cleans();
     if cleans.is_empty() {
         assert!(!ulog_tests::under_ci(), "no clean corpus file to damage");
@@ -376,7 +376,7 @@ fn at_least_97_percent_of_untouched_rows_are_recovered() {
     );
     assert!(refused < 25, "{refused} of 250 copies refused");
     assert!(
-        ratio >= 0.97,
+        ratio >= 0.999,
         "recovered {:.3}% of untouched rows",
         100.0 * ratio
     );
@@ -713,4 +713,48 @@ fn fuzz_regressions_pass() {
     }
     assert!(ran > 0, "regression inputs under {}", root.display());
     eprintln!("{ran} fuzz regressions pass");
+}
+
+/// Every single-bit flip of the size field of rows of every clean corpus log loses at most
+/// that row: where the declared size does not fit the row's format and the format's own
+/// size ends on a message, the reader resynchronizes there.
+#[test]
+fn a_flipped_bit_in_a_rows_size_costs_at_most_that_row() {
+    let mut trials = 0;
+    let mut failures = Vec::new();
+    for clean in cleans() {
+        // Rows spread over the file: the first, and nine more at even steps.
+        let picks: Vec<usize> = (0..10).map(|k| k * clean.rows.len() / 10).collect();
+        for &i in &picks {
+            let (start, _, _) = clean.rows[i];
+            for bit in 0..16 {
+                let mut bytes = clean.bytes.clone();
+                let size = u16::from_le_bytes([bytes[start], bytes[start + 1]]) ^ (1 << bit);
+                bytes[start..start + 2].copy_from_slice(&size.to_le_bytes());
+                let rows = read_rows(&bytes).unwrap();
+                let got: std::collections::HashMap<usize, &Vec<u8>> =
+                    rows.iter().map(|(o, d)| (*o, d)).collect();
+                let lost = clean
+                    .rows
+                    .iter()
+                    .filter(|(o, _, d)| *o != start && got.get(o) != Some(&d))
+                    .count();
+                trials += 1;
+                if lost > 0 {
+                    failures.push(format!(
+                        "{} row {i} bit {bit}: {lost} other rows lost",
+                        clean.name
+                    ));
+                }
+                assert_eq!(
+                    stream_rows(&bytes, 4096).unwrap(),
+                    rows,
+                    "{} row {i} bit {bit}: the stream reads the same",
+                    clean.name
+                );
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{trials} flips:\n{}", failures.join("\n"));
+    eprintln!("{trials} single-bit flips of a row's size: no other row lost");
 }

@@ -302,6 +302,28 @@ impl Framer {
             let accepted = match self.plausibility(p, ty, &msg[MESSAGE_HEADER_LEN..]) {
                 Plausibility::Strong => true,
                 Plausibility::Invalid => false,
+                // A row of a subscribed format whose declared size does not fit it: a
+                // damaged size field when the format's own size ends on a message (even
+                // when the declared size does too: following it would lose every message
+                // it spans). Then the boundary is the format's: the scan resumes there,
+                // and only this row is lost.
+                Plausibility::Weak
+                    if ty == b'D'
+                        && let Some(ends) = self.format_ends(&msg[MESSAGE_HEADER_LEN..], p) =>
+                {
+                    let strong_at = |at: u64| self.strong_successor(w, base, avail, end, at);
+                    let (Some(a), Some(b)) = (strong_at(ends.0), strong_at(ends.1)) else {
+                        return self.need_more(p);
+                    };
+                    if a || b {
+                        false
+                    } else {
+                        match self.successor(w, base, avail, end, msg_end) {
+                            None => return self.need_more(p),
+                            Some(next) => matches!(next, Plausibility::Strong | Plausibility::Weak),
+                        }
+                    }
+                }
                 Plausibility::Weak => match self.successor(w, base, avail, end, msg_end) {
                     None => return self.need_more(p),
                     Some(next) => matches!(next, Plausibility::Strong | Plausibility::Weak),
@@ -328,6 +350,17 @@ impl Framer {
                 size,
             };
         }
+    }
+
+    /// Where a `D` message at `at` of a subscribed `msg_id` would end with its format's
+    /// sizes (without and with trailing padding), if the `msg_id` is subscribed with
+    /// readable rows.
+    fn format_ends(&self, payload: &[u8], at: u64) -> Option<(u64, u64)> {
+        let kind = self.d_kinds[usize::from(u16_at(payload, 0))];
+        (kind.min <= kind.max).then(|| {
+            let end = |size: u16| at + MESSAGE_HEADER_LEN as u64 + u64::from(size);
+            (end(kind.min), end(kind.max))
+        })
     }
 
     fn need_more(&self, p: u64) -> Frame {

@@ -815,3 +815,44 @@ fn the_stream_gives_each_events_message_as_the_file_holds_it() {
     // Flag bits, format, subscription, 3 syncs, 26 rows, the logged string.
     assert_eq!((messages, diagnostics), (33, 1));
 }
+
+#[test]
+fn any_single_bit_flip_of_a_rows_size_costs_at_most_that_row() {
+    // Rows of varied bytes, long enough that a size grown by a high bit still ends inside
+    // the file (on bytes that may look like a message header), no syncs to fall back on.
+    let mut f = File::v1(0);
+    f.format("t:uint64_t timestamp;int16_t v;uint8_t[2] _padding0;uint32_t[16] noise;");
+    f.subscribe(0, 0, "t");
+    let mut offsets = Vec::new();
+    let mut x = 0x2545_f491_u32;
+    for i in 0..6000u64 {
+        let mut data = row(i, i as i16);
+        data.extend_from_slice(&[0, 0]);
+        for _ in 0..16 {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            data.extend_from_slice(&x.to_le_bytes());
+        }
+        offsets.push(f.data(0, &data));
+    }
+    for (k, &victim) in [100usize, 2500, 4000].iter().enumerate() {
+        for bit in 0..16 {
+            let mut bytes = f.0.clone();
+            let at = offsets[victim] as usize;
+            let size = u16::from_le_bytes([bytes[at], bytes[at + 1]]) ^ (1 << bit);
+            bytes[at..at + 2].copy_from_slice(&size.to_le_bytes());
+            let log = Log::from_slice(&bytes).unwrap();
+            let got: Vec<i16> = values(&log, "t").into_iter().map(|x| x.1).collect();
+            let expected: Vec<i16> = (0..6000).filter(|&i| i != victim as i16).collect();
+            let without: Vec<i16> = got.iter().copied().filter(|&v| v != victim as i16).collect();
+            assert_eq!(without.len(), expected.len(), "row {victim} bit {bit}: rows lost");
+            assert_eq!(without, expected, "row {victim} bit {bit}: every other row, in order");
+            if k == 0 {
+                let (rows, diags) = stream_rows(&bytes, 4096);
+                assert_eq!(rows, log_rows(&log), "bit {bit}: the stream reads the same");
+                assert_eq!(&diags, log.diagnostics(), "bit {bit}");
+            }
+        }
+    }
+}
