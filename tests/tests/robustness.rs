@@ -755,6 +755,10 @@ fn a_flipped_bit_in_a_rows_size_costs_at_most_that_row() {
             }
         }
     }
-    assert!(failures.is_empty(), "{trials} flips:\n{}", failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "{trials} flips:\n{}",
+        failures.join("\n")
+    );
     eprintln!("{trials} single-bit flips of a row's size: no other row lost");
 }

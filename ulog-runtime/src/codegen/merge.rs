@@ -23,6 +23,16 @@ pub enum Merge {
     Lossless,
     /// As [`Merge::Lossless`], but such a field is an error.
     Strict,
+    /// As [`Merge::Lossless`], and then every number is made the widest type of its kind,
+    /// even where all inputs agree: unsigned integers `u64`, signed ones `i64`, floats
+    /// `f64` (`bool` and `char` stay), all `#[ulog(widen)]`. The types then also read
+    /// versions newer than their inputs that widened a field (PX4 made
+    /// `vehicle_status.onboard_control_sensors_*` `uint64_t` after years of `uint32_t`).
+    /// What it costs: every number takes 8 bytes in memory (a `uint8_t[16]` becomes
+    /// `[u64; 16]`), the types write their own, wider formats (not the firmware's), and a
+    /// field that changes signedness toward unsigned (`int8_t` to `uint8_t`) still has no
+    /// common type. It applies to every type of the builder, merged or not.
+    Widest,
 }
 
 /// How one field appears across the definitions.
@@ -63,7 +73,11 @@ pub(crate) fn merge(group: Vec<Definition>, mode: Merge) -> Result<Definition, C
     let mut left_out = Vec::new();
     for s in &seen {
         let usage = usage(s, &places);
-        match common(s) {
+        let common = common(s).map(|(field, widens)| match mode {
+            Merge::Widest => widest(field, widens),
+            _ => (field, widens),
+        });
+        match common {
             Some((field, widens)) => {
                 if s.per_input.iter().any(Option::is_none) {
                     optional.insert(field.name.clone());
@@ -96,12 +110,23 @@ pub(crate) fn merge(group: Vec<Definition>, mode: Merge) -> Result<Definition, C
         .clone()
         .map(|d| format!("{d}\n\n"))
         .unwrap_or_default();
-    doc.push_str(&format!(
-        "One type for the {} definitions of `{name}` in {}: fields some lack are `Option`, \
-         types that differ are widened to one that holds every value.",
-        places.len(),
-        places.join(", ")
-    ));
+    if places.len() > 1 {
+        doc.push_str(&format!(
+            "One type for the {} definitions of `{name}` in {}: fields some lack are `Option`, \
+             types that differ are widened to one that holds every value.",
+            places.len(),
+            places.join(", ")
+        ));
+    }
+    if mode == Merge::Widest {
+        if places.len() > 1 {
+            doc.push_str(" ");
+        }
+        doc.push_str(
+            "Every number is the widest type of its kind (`Merge::Widest`), so that the type \
+             also reads versions that widened a field.",
+        );
+    }
     for line in &left_out {
         doc.push_str(&format!(
             "\n\nLeft out (no Rust type holds every value of its types): {line}"
@@ -148,6 +173,26 @@ fn common(s: &Seen<'_>) -> Option<(Field, bool)> {
         },
         true,
     ))
+}
+
+/// The widest type of a field's kind ([`Merge::Widest`]), and whether it widens.
+fn widest(field: Field, widens: bool) -> (Field, bool) {
+    let wide = match field.ty {
+        TypeRef::Primitive(p) if p.is_unsigned_integer() => Primitive::UInt64,
+        TypeRef::Primitive(
+            Primitive::Int8 | Primitive::Int16 | Primitive::Int32 | Primitive::Int64,
+        ) => Primitive::Int64,
+        TypeRef::Primitive(Primitive::Float | Primitive::Double) => Primitive::Double,
+        _ => return (field, widens),
+    };
+    let changed = field.ty != TypeRef::Primitive(wide);
+    (
+        Field {
+            ty: TypeRef::Primitive(wide),
+            ..field
+        },
+        widens || changed,
+    )
 }
 
 /// `float` in a.ulg, b.ulg; `double` in c.ulg; absent from d.ulg.

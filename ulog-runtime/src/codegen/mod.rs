@@ -371,7 +371,7 @@ impl Builder {
 
     /// What to do with a name that inputs define differently (default [`Merge::Never`]: an
     /// error). [`Merge::Lossless`] makes one type that reads every definition: e.g. the
-    /// logs of a fleet of PX4 versions.
+    /// logs of a fleet of PX4 versions; [`Merge::Widest`] also the versions after them.
     pub fn merge(&mut self, merge: Merge) -> &mut Builder {
         self.merge = merge;
         self
@@ -589,6 +589,18 @@ impl Builder {
         let mut defs = Vec::with_capacity(groups.len());
         for group in groups {
             let differing = group.iter().any(|d| d.format != group[0].format);
+            if self.merge == Merge::Widest {
+                if self.exact {
+                    return Err(CodegenError::InvalidOption {
+                        what: "exact",
+                        value: "true".to_owned(),
+                        message: "widened types (`Merge::Widest`) cannot be exact".to_owned(),
+                    });
+                }
+                // Every type widened, whether its inputs agree or not.
+                defs.push(merge::merge(group, self.merge)?);
+                continue;
+            }
             if !differing {
                 // The same definition again: keep the first, with any docs the others add.
                 let mut rest = group.into_iter();

@@ -7,7 +7,7 @@ use ulog_runtime::codegen::{Builder, Merge};
 
 use crate::Failure;
 
-/// `ulog codegen FILE... [-m a,b] [--msg-dir DIR] [--strict]`.
+/// `ulog codegen FILE... [-m a,b] [--msg-dir DIR] [--strict | --widest]`.
 #[derive(clap::Args)]
 #[command(arg_required_else_help = true)]
 pub(crate) struct Args {
@@ -21,8 +21,12 @@ pub(crate) struct Args {
     messages: Vec<String>,
     /// With several inputs, a field whose types have no lossless common type is an error
     /// (default: left out of the merged type, with a doc comment).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "widest")]
     strict: bool,
+    /// Every number the widest type of its kind (u64, i64, f64), so that the types also read
+    /// newer versions that widened a field (`Merge::Widest`).
+    #[arg(long)]
+    widest: bool,
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
@@ -61,7 +65,9 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
             builder.msg_dir_topics(dir, &topics);
         }
     }
-    if args.files.len() + args.msg_dir.len() > 1 {
+    if args.widest {
+        builder.merge(Merge::Widest);
+    } else if args.files.len() + args.msg_dir.len() > 1 {
         builder.merge(if args.strict {
             Merge::Strict
         } else {

@@ -845,9 +845,20 @@ fn any_single_bit_flip_of_a_rows_size_costs_at_most_that_row() {
             let log = Log::from_slice(&bytes).unwrap();
             let got: Vec<i16> = values(&log, "t").into_iter().map(|x| x.1).collect();
             let expected: Vec<i16> = (0..6000).filter(|&i| i != victim as i16).collect();
-            let without: Vec<i16> = got.iter().copied().filter(|&v| v != victim as i16).collect();
-            assert_eq!(without.len(), expected.len(), "row {victim} bit {bit}: rows lost");
-            assert_eq!(without, expected, "row {victim} bit {bit}: every other row, in order");
+            let without: Vec<i16> = got
+                .iter()
+                .copied()
+                .filter(|&v| v != victim as i16)
+                .collect();
+            assert_eq!(
+                without.len(),
+                expected.len(),
+                "row {victim} bit {bit}: rows lost"
+            );
+            assert_eq!(
+                without, expected,
+                "row {victim} bit {bit}: every other row, in order"
+            );
             if k == 0 {
                 let (rows, diags) = stream_rows(&bytes, 4096);
                 assert_eq!(rows, log_rows(&log), "bit {bit}: the stream reads the same");
