@@ -667,6 +667,9 @@ impl<W: Write> Pass<'_, W> {
 
     /// Writes an info, multi info, format or parameter message as the rules say.
     fn kept_message(&mut self, ty: u8, payload: &[u8]) -> Result<(), RewriteError> {
+        if matches!(ty, b'P' | b'Q') {
+            return self.parameter(ty, payload);
+        }
         if matches!(ty, b'I' | b'M') {
             let entry = match Message::parse(ty, payload) {
                 Ok(Message::Info(kv)) => Some(kv),
@@ -675,6 +678,11 @@ impl<W: Write> Pass<'_, W> {
             };
             if let Some(kv) = entry {
                 let name = crate::read::key_name(kv);
+                if let Some(a) = &mut self.rules.anonymize
+                    && ty == b'I'
+                {
+                    a.observe_info(&name, kv);
+                }
                 let dropped = self.rules.drop_info.contains(&name)
                     || self
                         .rules
@@ -699,6 +707,15 @@ impl<W: Write> Pass<'_, W> {
             }
         }
         self.out.raw(ty, payload)
+    }
+
+    /// Writes a parameter (`P`) or default parameter (`Q`) message, anonymized if the rules
+    /// say so.
+    fn parameter(&mut self, ty: u8, payload: &[u8]) -> Result<(), RewriteError> {
+        match self.rules.anonymize.as_mut().and_then(|a| a.parameter(ty, payload)) {
+            Some(changed) => self.out.raw(ty, &changed),
+            None => self.out.raw(ty, payload),
+        }
     }
 
     /// The key text and value to write for an info value a rule replaces.
@@ -748,22 +765,22 @@ impl<W: Write> Pass<'_, W> {
                     match folded.iter().position(|(n, _)| *n == name) {
                         Some(k) => {
                             let (_, payload) = folded.remove(k);
-                            self.out.raw(b'P', &payload)?;
+                            self.parameter(b'P', &payload)?;
                         }
-                        None => self.out.raw(b'P', &h.payload)?,
+                        None => self.parameter(b'P', &h.payload)?,
                     }
                 }
                 ty => self.kept_message(ty, &h.payload)?,
             }
             // Parameters only changes before the window set: after the initial ones.
             if Some(i) == last_param || (last_param.is_none() && i + 1 == held.len()) {
-                for (_, payload) in folded.drain(..) {
-                    self.out.raw(b'P', &payload)?;
+                for (_, payload) in std::mem::take(&mut folded) {
+                    self.parameter(b'P', &payload)?;
                 }
             }
         }
         for (_, payload) in folded {
-            self.out.raw(b'P', &payload)?;
+            self.parameter(b'P', &payload)?;
         }
         self.report.formats_dropped = dropped_formats;
         Ok(())
@@ -1007,7 +1024,10 @@ impl<W: Write> Pass<'_, W> {
                     return self.out.raw(ty, &changed);
                 }
             }
-            Timed::Change(_) => self.report.parameter_changes.0 += 1,
+            Timed::Change(_) => {
+                self.report.parameter_changes.0 += 1;
+                return self.parameter(ty, payload);
+            }
             Timed::Dropout | Timed::Sync => {}
         }
         self.out.raw(ty, payload)
