@@ -6,6 +6,9 @@
 //!   two instances, every message type) and sees exactly what this reader sees and what was
 //!   written.
 
+#[path = "writer/rewrite.rs"]
+mod rewrite;
+
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 

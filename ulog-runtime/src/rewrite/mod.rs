@@ -712,7 +712,12 @@ impl<W: Write> Pass<'_, W> {
     /// Writes a parameter (`P`) or default parameter (`Q`) message, anonymized if the rules
     /// say so.
     fn parameter(&mut self, ty: u8, payload: &[u8]) -> Result<(), RewriteError> {
-        match self.rules.anonymize.as_mut().and_then(|a| a.parameter(ty, payload)) {
+        match self
+            .rules
+            .anonymize
+            .as_mut()
+            .and_then(|a| a.parameter(ty, payload))
+        {
             Some(changed) => self.out.raw(ty, &changed),
             None => self.out.raw(ty, payload),
         }

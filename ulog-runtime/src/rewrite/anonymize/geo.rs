@@ -44,8 +44,9 @@ impl Rotation {
     /// The rotated latitude and longitude (longitude in `(-180, 180]`).
     pub(super) fn apply(&self, lat: f64, lon: f64) -> (f64, f64) {
         let p = unit(lat, lon);
-        let q: [f64; 3] =
-            std::array::from_fn(|i| self.m[i][0] * p[0] + self.m[i][1] * p[1] + self.m[i][2] * p[2]);
+        let q: [f64; 3] = std::array::from_fn(|i| {
+            self.m[i][0] * p[0] + self.m[i][1] * p[1] + self.m[i][2] * p[2]
+        });
         (
             q[2].clamp(-1.0, 1.0).asin().to_degrees(),
             q[1].atan2(q[0]).to_degrees(),

@@ -157,9 +157,9 @@ impl Stored {
 
     fn read(self, row: &[u8]) -> Option<f64> {
         match self {
-            Stored::Scaled(at, scale) => Some(
-                f64::from(i32::from_le_bytes(row.get(at..at + 4)?.try_into().ok()?)) * scale,
-            ),
+            Stored::Scaled(at, scale) => {
+                Some(f64::from(i32::from_le_bytes(row.get(at..at + 4)?.try_into().ok()?)) * scale)
+            }
             Stored::Float(at, p) => {
                 Scalar::decode(p, row.get(at..at + p.size())?).map(Scalar::as_f64)
             }
@@ -375,12 +375,14 @@ impl Anonymizer {
     /// A replacement for an info value, if one is needed.
     pub(in crate::rewrite) fn info(&mut self, name: &str, kv: KeyValue<'_>) -> Option<Value> {
         match name {
-            "time_ref_utc" if !self.rules.keep_time => {
-                Some(Value::Scalar(Scalar::Int32(0)))
-            }
+            "time_ref_utc" if !self.rules.keep_time => Some(Value::Scalar(Scalar::Int32(0))),
             "boot_time_utc_us" | "time_start_utc" if !self.rules.keep_time => {
                 let t = u64::from_le_bytes(kv.value.get(..8)?.try_into().ok()?);
-                Some(Value::Scalar(Scalar::UInt64(if t == 0 { 0 } else { self.shift_time(t) })))
+                Some(Value::Scalar(Scalar::UInt64(if t == 0 {
+                    0
+                } else {
+                    self.shift_time(t)
+                })))
             }
             _ => None,
         }
@@ -395,8 +397,7 @@ impl Anonymizer {
             _ => return None,
         };
         let name = crate::read::key_name(kv);
-        if !rules::ZEROED_PARAMETERS.contains(&name.as_str()) || kv.value.iter().all(|&b| b == 0)
-        {
+        if !rules::ZEROED_PARAMETERS.contains(&name.as_str()) || kv.value.iter().all(|&b| b == 0) {
             return None;
         }
         if !self.parameters.contains(&name) {
@@ -444,7 +445,13 @@ impl Anonymizer {
             && let (Some(lat), Some(lon)) = (Stored::of(x, 1e-7), Stored::of(y, 1e-7))
         {
             let slot = plan.slot("x/y");
-            plan.pairs.push(Pair { lat, lon, when, skip_near_zero: false, slot });
+            plan.pairs.push(Pair {
+                lat,
+                lon,
+                when,
+                skip_near_zero: false,
+                slot,
+            });
         }
         if rules::OBSERVED_POSITIONS.contains(&topic)
             && let (Some(a @ Leaf::Value(_, Primitive::Double)), Some(b)) =
@@ -452,7 +459,13 @@ impl Anonymizer {
             && let (Some(lat), Some(lon)) = (Stored::of(a, 1e-7), Stored::of(b, 1e-7))
         {
             let slot = plan.slot("observation[0]/observation[1]");
-            plan.pairs.push(Pair { lat, lon, when: When::Always, skip_near_zero: true, slot });
+            plan.pairs.push(Pair {
+                lat,
+                lon,
+                when: When::Always,
+                skip_near_zero: true,
+                slot,
+            });
         }
         if let Some(leaf) = command
             && let (Some(p5), Some(p6)) = (field("param5"), field("param6"))
@@ -460,28 +473,51 @@ impl Anonymizer {
         {
             let slot = plan.slot("param5/param6");
             let when = When::Command(leaf);
-            plan.pairs.push(Pair { lat, lon, when, skip_near_zero: false, slot });
+            plan.pairs.push(Pair {
+                lat,
+                lon,
+                when,
+                skip_near_zero: false,
+                slot,
+            });
             if let Some(stored) = field("param7").and_then(|l| Stored::of(l, 1e-3)) {
                 let slot = plan.slot("param7");
-                plan.altitudes.push(Altitude { stored, sign: 1.0, when, slot });
+                plan.altitudes.push(Altitude {
+                    stored,
+                    sign: 1.0,
+                    when,
+                    slot,
+                });
             }
         }
         if rules::NEGATED_ALTITUDE_TOPICS.contains(&topic)
             && let Some(stored) = field("observation").and_then(|l| Stored::of(l, 1e-3))
         {
             let slot = plan.slot("observation");
-            plan.altitudes.push(Altitude { stored, sign: -1.0, when: When::Always, slot });
+            plan.altitudes.push(Altitude {
+                stored,
+                sign: -1.0,
+                when: When::Always,
+                slot,
+            });
         }
         if topic == "navigator_mission_item"
             && let Some(stored) = field("altitude").and_then(|l| Stored::of(l, 1e-3))
         {
             let when = field("altitude_is_relative").map_or(When::Always, |l| When::Equals(l, 0.0));
             let slot = plan.slot("altitude");
-            plan.altitudes.push(Altitude { stored, sign: 1.0, when, slot });
+            plan.altitudes.push(Altitude {
+                stored,
+                sign: 1.0,
+                when,
+                slot,
+            });
         }
         if topic == "event"
-            && let (Some(Leaf::Value(id, Primitive::UInt32)), Some(Leaf::Value(args, Primitive::UInt8))) =
-                (field("id"), field("arguments[0]"))
+            && let (
+                Some(Leaf::Value(id, Primitive::UInt32)),
+                Some(Leaf::Value(args, Primitive::UInt8)),
+            ) = (field("id"), field("arguments[0]"))
         {
             let len = (0..)
                 .take_while(|k| field(&format!("arguments[{k}]")).is_some())
@@ -499,14 +535,25 @@ impl Anonymizer {
                 && let (Some(lat), Some(lon)) = (Stored::of(leaf, 1e-7), Stored::of(lon_leaf, 1e-7))
             {
                 let slot = plan.slot(&format!("{name}/{prefix}{lon_base}"));
-                plan.pairs.push(Pair { lat, lon, when: When::Always, skip_near_zero: false, slot });
+                plan.pairs.push(Pair {
+                    lat,
+                    lon,
+                    when: When::Always,
+                    skip_near_zero: false,
+                    slot,
+                });
                 continue;
             }
-            let altitude = rules::ALTITUDES.contains(&base)
-                || rules::TOPIC_ALTITUDES.contains(&(topic, name));
+            let altitude =
+                rules::ALTITUDES.contains(&base) || rules::TOPIC_ALTITUDES.contains(&(topic, name));
             if altitude && let Some(stored) = Stored::of(leaf, 1e-3) {
                 let slot = plan.slot(name);
-                plan.altitudes.push(Altitude { stored, sign: 1.0, when: When::Always, slot });
+                plan.altitudes.push(Altitude {
+                    stored,
+                    sign: 1.0,
+                    when: When::Always,
+                    slot,
+                });
                 continue;
             }
             if let Leaf::Value(at, Primitive::UInt64) = leaf
@@ -523,7 +570,9 @@ impl Anonymizer {
                     continue;
                 }
             }
-            if rules::IDENTIFIER_FIELDS.contains(&(topic, base)) || rules::IDENTIFIER_FIELDS.contains(&(topic, name)) {
+            if rules::IDENTIFIER_FIELDS.contains(&(topic, base))
+                || rules::IDENTIFIER_FIELDS.contains(&(topic, name))
+            {
                 let (at, len) = match leaf {
                     Leaf::Value(at, p) => (at, p.size()),
                     Leaf::Text(at, len) => (at, len),
@@ -645,7 +694,8 @@ impl Anonymizer {
         }
         if let Some((e, s)) = plan.event
             && let (Some(id), Some(args)) = (
-                row.get(e.id..e.id + 4).map(|b| u32::from_le_bytes(b.try_into().expect("4"))),
+                row.get(e.id..e.id + 4)
+                    .map(|b| u32::from_le_bytes(b.try_into().expect("4"))),
                 row.get_mut(e.args..e.args + e.len),
             )
             && event_args(id, args, offset, self.altitude_offset_m)
@@ -713,7 +763,14 @@ impl Anonymizer {
 fn event_args(id: u32, args: &mut [u8], time_offset_us: i64, altitude_offset_m: f64) -> bool {
     if id == rules::events::OPEN_FILE_TIME && args.len() >= 7 {
         let year = i64::from(u16::from_le_bytes([args[0], args[1]]));
-        let date = (year, u32::from(args[2]), u32::from(args[3]), u32::from(args[4]), u32::from(args[5]), u32::from(args[6]));
+        let date = (
+            year,
+            u32::from(args[2]),
+            u32::from(args[3]),
+            u32::from(args[4]),
+            u32::from(args[5]),
+            u32::from(args[6]),
+        );
         let (y, mo, d, h, mi, s) = if (1..=12).contains(&date.1) && (1..=31).contains(&date.2) {
             geo::shift_civil(date, time_offset_us)
         } else {
@@ -750,14 +807,29 @@ mod tests {
         let mut args = [0u8; 25];
         args[..2].copy_from_slice(&2026u16.to_le_bytes());
         args[2..7].copy_from_slice(&[3, 4, 11, 55, 42]);
-        assert!(event_args(rules::events::OPEN_FILE_TIME, &mut args, 86_400_000_000, 0.0));
-        assert_eq!((u16::from_le_bytes([args[0], args[1]]), &args[2..7]), (2026, &[3, 5, 11, 55, 42][..]));
+        assert!(event_args(
+            rules::events::OPEN_FILE_TIME,
+            &mut args,
+            86_400_000_000,
+            0.0
+        ));
+        assert_eq!(
+            (u16::from_le_bytes([args[0], args[1]]), &args[2..7]),
+            (2026, &[3, 5, 11, 55, 42][..])
+        );
         let mut args = [0u8; 25];
         args[..4].copy_from_slice(&491i32.to_le_bytes());
         args[4..8].copy_from_slice(&3i32.to_le_bytes());
         assert!(event_args(22_161_044, &mut args, 0, 100.0));
         assert_eq!(i32::from_le_bytes(args[..4].try_into().unwrap()), 591);
-        assert_eq!(i32::from_le_bytes(args[4..8].try_into().unwrap()), 3, "relative: kept");
-        assert!(!event_args(1, &mut args, 0, 100.0), "other events are left alone");
+        assert_eq!(
+            i32::from_le_bytes(args[4..8].try_into().unwrap()),
+            3,
+            "relative: kept"
+        );
+        assert!(
+            !event_args(1, &mut args, 0, 100.0),
+            "other events are left alone"
+        );
     }
 }

@@ -70,12 +70,16 @@ pub(super) const OBSERVED_POSITIONS: [&str; 3] = [
 
 /// Topics whose `x`/`y` are a latitude and longitude when their `frame` is this value
 /// (as PX4 writes them): `double` degrees for frame 0, `int32_t` 1e-7° for frame 5.
-pub(super) const FRAMED_POSITIONS: [(&str, u8); 2] = [("orbit_status", 0), ("figure_eight_status", 5)];
+pub(super) const FRAMED_POSITIONS: [(&str, u8); 2] =
+    [("orbit_status", 0), ("figure_eight_status", 5)];
 
 /// Command topics whose `param5`/`param6` are a latitude and longitude and `param7` an
 /// altitude for the MAVLink commands that carry a position.
-pub(super) const COMMAND_TOPICS: [&str; 3] =
-    ["vehicle_command", "gimbal_v1_command", "vehicle_command_mode_executor"];
+pub(super) const COMMAND_TOPICS: [&str; 3] = [
+    "vehicle_command",
+    "gimbal_v1_command",
+    "vehicle_command_mode_executor",
+];
 
 /// MAVLink commands with a global position in `param5`..`param7`.
 pub(super) const POSITION_COMMANDS: [u32; 19] = [
@@ -98,8 +102,12 @@ pub(super) const IDENTIFIER_FIELDS: [(&str, &str); 8] = [
 pub(super) const TEXT_TOPICS: [&str; 2] = ["log_message", "mavlink_log"];
 
 /// UTC times in any topic (µs since 1970; 0: unknown).
-pub(super) const UTC_TIMES: [&str; 4] =
-    ["time_utc_usec", "timestamp_utc", "rtc_timestamp", "remote_timestamp"];
+pub(super) const UTC_TIMES: [&str; 4] = [
+    "time_utc_usec",
+    "timestamp_utc",
+    "rtc_timestamp",
+    "remote_timestamp",
+];
 
 /// PX4 events with arguments to change, by id (`component << 24 | sub id`).
 pub(super) mod events {
@@ -108,7 +116,8 @@ pub(super) mod events {
     /// `vrtl_return_at` and `rtl_mission_land_climb`: an `int32_t` altitude AMSL first.
     pub(in super::super) const ALTITUDE_FIRST: [u32; 2] = [22_161_044, 27_006_470];
     /// `navigator_traffic*`: a `uint32_t` ICAO address of another aircraft first.
-    pub(in super::super) const ICAO_FIRST: [u32; 4] = [18_578_544, 23_921_860, 27_014_176, 27_441_269];
+    pub(in super::super) const ICAO_FIRST: [u32; 4] =
+        [18_578_544, 23_921_860, 27_014_176, 27_441_269];
 }
 
 /// Info keys that identify the vehicle or name the original file: not written.
@@ -147,18 +156,22 @@ pub(super) const ZEROED_PARAMETERS: [&str; 13] = [
 /// / `longitude` (`latitude_deg`, `operator_latitude`). Names of counters, flags and
 /// deltas (`lat_lon_reset_counter`, `delta_lat_lon`) are not.
 pub(super) fn longitude_of(base: &str) -> Option<String> {
-    if ["reset", "valid", "delta", "accel", "counter", "variance", "std"]
-        .iter()
-        .any(|w| base.contains(w))
+    if [
+        "reset", "valid", "delta", "accel", "counter", "variance", "std",
+    ]
+    .iter()
+    .any(|w| base.contains(w))
     {
         return None;
     }
     let words: Vec<&str> = base.split('_').collect();
-    let k = words
-        .iter()
-        .position(|w| *w == "lat" || *w == "latitude")?;
+    let k = words.iter().position(|w| *w == "lat" || *w == "latitude")?;
     let mut lon: Vec<&str> = words.clone();
-    lon[k] = if words[k] == "lat" { "lon" } else { "longitude" };
+    lon[k] = if words[k] == "lat" {
+        "lon"
+    } else {
+        "longitude"
+    };
     Some(lon.join("_"))
 }
 
@@ -190,7 +203,13 @@ mod tests {
         ] {
             assert_eq!(longitude_of(lat).as_deref(), Some(lon), "{lat}");
         }
-        for not in ["lat_lon_reset_counter", "delta_lat_lon", "lat_accel", "flat", "lat_lon_valid"] {
+        for not in [
+            "lat_lon_reset_counter",
+            "delta_lat_lon",
+            "lat_accel",
+            "flat",
+            "lat_lon_valid",
+        ] {
             assert_eq!(longitude_of(not), None, "{not}");
         }
         assert!(is_time_name("timestamp") && is_time_name("timestamp_sample"));

@@ -53,7 +53,9 @@ fn replace_log_paths(s: &str) -> String {
         let before = &rest[..i];
         let start = before
             .rfind(|c: char| !(c.is_ascii_alphanumeric() || "/._-~".contains(c)))
-            .map_or(0, |k| k + before[k..].chars().next().map_or(1, char::len_utf8));
+            .map_or(0, |k| {
+                k + before[k..].chars().next().map_or(1, char::len_utf8)
+            });
         out.push_str(&before[..start]);
         out.push_str("log.ulg");
         rest = &rest[i + 4..];
@@ -101,8 +103,10 @@ fn zero_addresses(s: &str) -> String {
         }
         if boundary
             && i + 17 <= b.len()
-            && (0..6).all(|k| b[i + 3 * k].is_ascii_hexdigit() && b[i + 3 * k + 1].is_ascii_hexdigit())
-            && (0..5).all(|k| matches!(b[i + 3 * k + 2], b':' | b'-') && b[i + 3 * k + 2] == b[i + 2])
+            && (0..6)
+                .all(|k| b[i + 3 * k].is_ascii_hexdigit() && b[i + 3 * k + 1].is_ascii_hexdigit())
+            && (0..5)
+                .all(|k| matches!(b[i + 3 * k + 2], b':' | b'-') && b[i + 3 * k + 2] == b[i + 2])
             && b.get(i + 17).is_none_or(|c| !c.is_ascii_hexdigit())
         {
             for k in 0..6 {
@@ -128,7 +132,10 @@ fn ipv4_end(b: &[u8], i: usize) -> Option<usize> {
         if !(1..=3).contains(&digits) {
             return None;
         }
-        let value: u32 = std::str::from_utf8(&b[at..at + digits]).ok()?.parse().ok()?;
+        let value: u32 = std::str::from_utf8(&b[at..at + digits])
+            .ok()?
+            .parse()
+            .ok()?;
         if value > 255 {
             return None;
         }
@@ -159,7 +166,10 @@ fn zero_dates_and_times(s: &str) -> String {
         }
         let n = digits_at(i);
         // A date: four digits, a separator, one or two, the same separator, one or two.
-        if n == 4 && let Some(&sep) = b.get(i + 4) && matches!(sep, b'-' | b'/' | b'_') {
+        if n == 4
+            && let Some(&sep) = b.get(i + 4)
+            && matches!(sep, b'-' | b'/' | b'_')
+        {
             let m = digits_at(i + 5);
             if (1..=2).contains(&m) && b.get(i + 5 + m) == Some(&sep) {
                 let d = digits_at(i + 6 + m);
@@ -240,8 +250,14 @@ mod tests {
             r("[logger] /fs/microsd/log/2019-04-25/12_30_05.ulg\t"),
             "[logger] log.ulg\t"
         );
-        assert_eq!(r("Opened full log file: sess100/log100.ulg"), "Opened full log file: log.ulg");
-        assert_eq!(r("logging: opening log file 2026-3-4/11_55_42.ulg"), "logging: opening log file log.ulg");
+        assert_eq!(
+            r("Opened full log file: sess100/log100.ulg"),
+            "Opened full log file: log.ulg"
+        );
+        assert_eq!(
+            r("logging: opening log file 2026-3-4/11_55_42.ulg"),
+            "logging: opening log file log.ulg"
+        );
         assert_eq!(r("at 10:11:12 on 2024/05/01"), "at 00:00:00 on 0000/00/00");
         assert_eq!(
             r("[mavlink] partner IP: 127.0.0.1 mac 0A:1b:2C:3d:4E:5f"),
@@ -251,7 +267,10 @@ mod tests {
             r("PX4GUID: 0006000000003037363035325111001b002e x"),
             "PX4GUID: 000000000000000000000000000000000000 x"
         );
-        assert_eq!(r("uuid 0006000000003037363035325111001b002e"), "uuid 000000000000000000000000000000000000");
+        assert_eq!(
+            r("uuid 0006000000003037363035325111001b002e"),
+            "uuid 000000000000000000000000000000000000"
+        );
         assert_eq!(r("battery serial: AB-123 ok"), "battery serial:  ok");
         assert_eq!(
             r("[navigator] RTL: start return at 491 m (3 m above destination)"),
