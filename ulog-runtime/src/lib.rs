@@ -9,6 +9,8 @@
 //!   own definitions once, then decoded by offset reads ([`Log::topic`]) and written
 //!   ([`Writer::topic`]).
 //! - [`write`](mod@write): a [`Writer`] of version-1 files.
+//! - [`rewrite`]: a log read as a stream and written again, cut to a time window, topics
+//!   kept or dropped, rows transformed, anonymized.
 //! - [`events`] (feature `events`): PX4 events decoded with the metadata the log embeds,
 //!   and the messages of a log as pyulog's `ulog_messages` lists them.
 //! - [`columns`]: a topic instance as typed columns (and, with features, Arrow record

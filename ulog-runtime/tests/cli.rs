@@ -980,3 +980,81 @@ fn info_names_a_version_1_file_without_flag_bits_and_an_absolute_start() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn cut_and_anonymize_write_new_logs_and_say_what_they_changed() {
+    let dir = temp_dir("rewrite");
+    let log = snapshot_log(&dir);
+    let input = std::fs::read(&log).unwrap();
+    let out = dir.join("cut.ulg");
+    let (l, o) = (log.to_str().unwrap(), out.to_str().unwrap());
+    let text = stdout(&[
+        "cut",
+        l,
+        "-o",
+        o,
+        "--start",
+        "3723.3",
+        "--end",
+        "3723.7",
+        "-m",
+        "esc_status",
+    ]);
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[0], o);
+    assert!(
+        lines.contains(&"rows: 8 of 22 written, 2 topic instances"),
+        "{text}"
+    );
+    assert!(lines.contains(&"  esc_status #0: 4 of 11 rows"), "{text}");
+    assert!(
+        lines.contains(
+            &"parameter changes: 1 written, 0 moved into the initial parameters, 0 left out"
+        ),
+        "{text}"
+    );
+    let cut = ulog_runtime::Log::open(&out).unwrap();
+    let times: Vec<u64> = cut.data().map(|r| r.timestamp).collect();
+    assert_eq!(times.len(), 8);
+    assert!(
+        times
+            .iter()
+            .all(|&t| (3_723_300_000..3_723_700_000).contains(&t))
+    );
+    assert_eq!(cut.logged_messages().len(), 2, "the strings at 3723.5 s");
+    // Never over the input; a topic the log lacks is named with the closest.
+    let same = ulog(&["cut", l, "-o", l, "--start", "3723.3"]);
+    assert_eq!(same.status.code(), Some(1));
+    assert!(
+        String::from_utf8_lossy(&same.stderr).contains("the output is the input file"),
+        "{same:?}"
+    );
+    assert_eq!(
+        std::fs::read(&log).unwrap(),
+        input,
+        "the input is untouched"
+    );
+    let typo = ulog(&["cut", l, "-o", o, "-m", "esc_stat"]);
+    assert_eq!(typo.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&typo.stderr).contains("did you mean `esc_status`?"));
+    // Anonymize: what it changed, and the same seed the same bytes.
+    let anon = dir.join("anon.ulg");
+    let a = anon.to_str().unwrap();
+    let text = stdout(&["anonymize", l, "-o", a, "--seed", "9"]);
+    assert!(
+        text.contains("anonymized: no position found (altitudes"),
+        "{text}"
+    );
+    let first = std::fs::read(&anon).unwrap();
+    stdout(&["anonymize", l, "-o", a, "--seed", "9"]);
+    assert_eq!(std::fs::read(&anon).unwrap(), first);
+    let meta = ulog_runtime::Log::open(&anon).unwrap();
+    assert!(
+        meta.metadata().multi_info().is_empty(),
+        "multi info that is not kept by name goes"
+    );
+    let bad = ulog(&["anonymize", l, "-o", a, "--origin", "91,0"]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--origin 91,0: expected LAT,LON"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

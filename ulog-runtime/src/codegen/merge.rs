@@ -120,7 +120,7 @@ pub(crate) fn merge(group: Vec<Definition>, mode: Merge) -> Result<Definition, C
     }
     if mode == Merge::Widest {
         if places.len() > 1 {
-            doc.push_str(" ");
+            doc.push(' ');
         }
         doc.push_str(
             "Every number is the widest type of its kind (`Merge::Widest`), so that the type \

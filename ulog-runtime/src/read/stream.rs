@@ -79,6 +79,26 @@ pub struct StreamReader<R> {
     last: Option<(u64, u8, std::ops::Range<usize>)>,
 }
 
+/// What [`StreamReader::advance`] moved to: an event without its borrows of the reader.
+enum Next {
+    Row {
+        offset: u64,
+        /// The row's data in `buf`.
+        data: std::ops::Range<usize>,
+        sub: usize,
+        timestamp: u64,
+    },
+    Definition {
+        offset: u64,
+        ty: MessageType,
+    },
+    /// The last subscription.
+    Subscription,
+    Diagnostic(Box<Diagnostic>),
+    /// An event that borrows nothing.
+    Event(Event<'static>),
+}
+
 /// One message as the file holds it ([`StreamReader::message`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RawMessage<'a> {
@@ -278,10 +298,67 @@ impl<R: Read> StreamReader<R> {
     /// processor has just written, which costs more than decoding a small row.
     #[allow(clippy::should_implement_trait)]
     pub fn next_event(&mut self) -> Result<Option<Event<'_>>, ReadError> {
-        if self.pending.is_some() {
-            let d = self.pending.take().expect("checked");
+        Ok(self.advance()?.map(|next| self.event(next)))
+    }
+
+    /// Calls `f` with every event, the message it came from as the file holds it (`None`
+    /// for a diagnostic) and the metadata read so far, to the end of the file or the first
+    /// error `f` returns: what a tool that copies or rewrites a log needs (the rows of each
+    /// window come in a tight loop, as with [`StreamReader::for_each_event`]).
+    ///
+    /// ```no_run
+    /// # fn main() -> Result<(), ulog_runtime::ReadError> {
+    /// use std::io::Write;
+    /// use ulog_runtime::StreamReader;
+    /// let file = std::fs::File::open("flight.ulg")?;
+    /// let mut out = std::io::BufWriter::new(std::fs::File::create("copy.ulg")?);
+    /// out.write_all(&StreamReader::new(std::fs::File::open("flight.ulg")?)?.metadata().header().to_bytes())?;
+    /// StreamReader::new(file)?.for_each_message(|_meta, _event, raw| {
+    ///     if let Some(m) = raw {
+    ///         let size = (m.payload.len() as u16).to_le_bytes();
+    ///         out.write_all(&[size[0], size[1], m.ty])?;
+    ///         out.write_all(m.payload)?;
+    ///     }
+    ///     Ok::<(), ulog_runtime::ReadError>(())
+    /// })?;
+    /// # Ok(()) }
+    /// ```
+    pub fn for_each_message<E: From<ReadError>>(
+        &mut self,
+        mut f: impl FnMut(&Metadata, Event<'_>, Option<RawMessage<'_>>) -> Result<(), E>,
+    ) -> Result<(), E> {
+        loop {
+            if self.pending.is_none() {
+                let window = &self.buf[self.start..self.end];
+                while let Some(row) = self.walker.fast_row(window, self.base) {
+                    let raw = RawMessage {
+                        offset: row.offset,
+                        ty: b'D',
+                        payload: &window[row.data.start - 2..row.data.end],
+                    };
+                    let event = Event::Row(Row {
+                        timestamp: row.timestamp,
+                        offset: row.offset,
+                        data: &window[row.data],
+                        subscription: &self.walker.meta.subscriptions[row.sub],
+                        schema: &self.walker.meta.schema,
+                    });
+                    f(&self.walker.meta, event, Some(raw))?;
+                }
+            }
+            let Some(next) = self.advance()? else {
+                return Ok(());
+            };
+            let event = self.event(next);
+            f(&self.walker.meta, event, self.message())?;
+        }
+    }
+
+    /// Moves to the next event, recording its message.
+    fn advance(&mut self) -> Result<Option<Next>, ReadError> {
+        if let Some(d) = self.pending.take() {
             self.last = None;
-            return Ok(Some(Event::Diagnostic(d)));
+            return Ok(Some(Next::Diagnostic(d)));
         }
         let (start, end) = (self.start, self.end);
         if let Some(row) = self.walker.fast_row(&self.buf[start..end], self.base) {
@@ -291,13 +368,12 @@ impl<R: Read> StreamReader<R> {
                 b'D',
                 start + row.data.start - 2..start + row.data.end,
             ));
-            return Ok(Some(Event::Row(Row {
-                timestamp: row.timestamp,
+            return Ok(Some(Next::Row {
                 offset: row.offset,
-                data: &self.buf[start..end][row.data],
-                subscription: &self.walker.meta.subscriptions[row.sub],
-                schema: &self.walker.meta.schema,
-            })));
+                data: start + row.data.start..start + row.data.end,
+                sub: row.sub,
+                timestamp: row.timestamp,
+            }));
         }
         loop {
             let window = &self.buf[self.start..self.end];
@@ -313,50 +389,65 @@ impl<R: Read> StreamReader<R> {
                     applied,
                     payload,
                 } => {
-                    self.last = match applied {
-                        Applied::Diagnostic(_) => None,
-                        _ => {
-                            let at = self.start
-                                + (offset - self.base) as usize
-                                + super::MESSAGE_HEADER_LEN;
-                            let ty = self.buf[at - 1];
-                            Some((offset, ty, at..at + payload.len()))
-                        }
+                    // A diagnostic stands for no message (its offset may lie outside the
+                    // window).
+                    let (ty, range) = if let Applied::Diagnostic(_) = applied {
+                        self.last = None;
+                        (0, 0..0)
+                    } else {
+                        let at =
+                            self.start + (offset - self.base) as usize + super::MESSAGE_HEADER_LEN;
+                        let range = at..at + payload.len();
+                        self.last = Some((offset, self.buf[at - 1], range.clone()));
+                        (self.buf[at - 1], range)
                     };
-                    let event = match applied {
-                        Applied::Nothing => {
-                            let ty = window[(offset - self.base) as usize + 2];
-                            match MessageType::from_byte(ty) {
-                                Some(ty) => Event::Definition { offset, ty },
-                                None => continue,
-                            }
-                        }
+                    return Ok(Some(match applied {
+                        Applied::Nothing => match MessageType::from_byte(ty) {
+                            Some(ty) => Next::Definition { offset, ty },
+                            None => continue,
+                        },
                         Applied::Subscribed { diagnostic, .. } => {
                             self.pending = diagnostic.map(Box::new);
-                            let sub = self.walker.meta.subscriptions.last().expect("just added");
-                            Event::Subscription(sub)
+                            Next::Subscription
                         }
-                        Applied::Row { sub, timestamp } => {
-                            let start =
-                                (offset - self.base) as usize + super::MESSAGE_HEADER_LEN + 2;
-                            let len = payload.len() - 2;
-                            Event::Row(Row {
-                                timestamp,
-                                offset,
-                                data: &self.buf[self.start..self.end][start..start + len],
-                                subscription: &self.walker.meta.subscriptions[sub],
-                                schema: &self.walker.meta.schema,
-                            })
-                        }
-                        Applied::Logged(m) => Event::Logged(m),
-                        Applied::Dropout(d) => Event::Dropout(d),
-                        Applied::ParameterChange(c) => Event::ParameterChange(c),
-                        Applied::Sync => Event::Sync { offset },
-                        Applied::Diagnostic(d) => Event::Diagnostic(Box::new(d)),
-                    };
-                    return Ok(Some(event));
+                        Applied::Row { sub, timestamp } => Next::Row {
+                            offset,
+                            data: range.start + 2..range.end,
+                            sub,
+                            timestamp,
+                        },
+                        Applied::Logged(m) => Next::Event(Event::Logged(m)),
+                        Applied::Dropout(d) => Next::Event(Event::Dropout(d)),
+                        Applied::ParameterChange(c) => Next::Event(Event::ParameterChange(c)),
+                        Applied::Sync => Next::Event(Event::Sync { offset }),
+                        Applied::Diagnostic(d) => Next::Diagnostic(Box::new(d)),
+                    }));
                 }
             }
+        }
+    }
+
+    /// The event of what [`StreamReader::advance`] moved to.
+    fn event(&self, next: Next) -> Event<'_> {
+        match next {
+            Next::Row {
+                offset,
+                data,
+                sub,
+                timestamp,
+            } => Event::Row(Row {
+                timestamp,
+                offset,
+                data: &self.buf[data],
+                subscription: &self.walker.meta.subscriptions[sub],
+                schema: &self.walker.meta.schema,
+            }),
+            Next::Definition { offset, ty } => Event::Definition { offset, ty },
+            Next::Subscription => {
+                Event::Subscription(self.walker.meta.subscriptions.last().expect("just added"))
+            }
+            Next::Diagnostic(d) => Event::Diagnostic(d),
+            Next::Event(e) => e,
         }
     }
 

@@ -48,7 +48,9 @@ pub use fields::{FieldError, RowFields};
 
 use crate::columns::{Admit, Window};
 use crate::read::FileHeader;
-use crate::read::{FlagBits, KeyValue, Message, MessageTooLarge, Skipped, Subscription};
+use crate::read::{
+    FlagBits, KeyValue, Message, MessageTooLarge, RawMessage, Skipped, Subscription,
+};
 use crate::schema::{Schema, TypeRef};
 use crate::typed::{Topic, TypedDecoder, TypedError, encode_row};
 use crate::value::Value;
@@ -522,39 +524,28 @@ impl Rewrite {
             }
             .to_bytes(),
         )?;
-        while let Some(event) = reader.next_event()? {
-            // What the event is, owned, so that the reader's message can be read after.
-            let step = match &event {
-                Event::Row(row) => {
-                    pass.row(row)?;
-                    continue;
-                }
+        reader.for_each_message(|meta, event, raw| {
+            let raw = || raw.expect("an event of a message");
+            match &event {
+                Event::Row(row) => pass.row(row),
                 Event::Diagnostic(d) => {
                     pass.report.skipped.add(d);
-                    continue;
+                    Ok(())
                 }
-                Event::Subscription(sub) => Step::Subscription((*sub).clone()),
-                Event::Definition { .. } => Step::Definition,
-                Event::Logged(m) => Step::Timed(Some(m.timestamp), Timed::Logged),
+                Event::Subscription(sub) => pass.subscription(sub, meta.schema()),
+                Event::Definition { .. } => {
+                    let m = raw();
+                    pass.definition(m.ty, m.payload, meta.in_data_section())
+                }
+                Event::Logged(l) => pass.timed(l.timestamp, Timed::Logged, raw(), meta),
                 Event::ParameterChange(c) => {
-                    Step::Timed(Some(c.timestamp), Timed::Change(c.name.clone()))
+                    pass.timed(c.timestamp, Timed::Change(c.name.clone()), raw(), meta)
                 }
-                Event::Dropout(d) => Step::Timed(Some(d.timestamp), Timed::Dropout),
+                Event::Dropout(d) => pass.timed(d.timestamp, Timed::Dropout, raw(), meta),
                 // A sync's time: the latest row's.
-                Event::Sync { .. } => Step::Timed(None, Timed::Sync),
-            };
-            let meta = reader.metadata();
-            let in_data = meta.in_data_section();
-            let last = meta.last_timestamp();
-            let raw = reader.message().expect("the event's message");
-            match step {
-                Step::Subscription(sub) => pass.subscription(&sub, meta.schema())?,
-                Step::Definition => pass.definition(raw.ty, raw.payload, in_data)?,
-                Step::Timed(t, what) => {
-                    pass.timed(t.unwrap_or(last), what, raw.ty, raw.payload, in_data)?;
-                }
+                Event::Sync { .. } => pass.timed(meta.last_timestamp(), Timed::Sync, raw(), meta),
             }
-        }
+        })?;
         pass.flush()?;
         let mut report = pass.finish()?;
         report.bytes_in = input.read;
@@ -567,12 +558,13 @@ impl Rewrite {
         if same_file(input, output) {
             return Err(RewriteError::SameFile(output.to_owned()));
         }
+        // Read as it is: the stream reader reads in chunks of its own.
         let file = std::fs::File::open(input).map_err(|e| RewriteError::Read(e.into()))?;
         let mut partial = output.as_os_str().to_owned();
         partial.push(".partial");
         let partial = std::path::PathBuf::from(partial);
         let out = std::fs::File::create(&partial).map_err(RewriteError::Write)?;
-        let result = self.run(io::BufReader::with_capacity(256 << 10, file), out);
+        let result = self.run(file, out);
         match result {
             Ok(report) => {
                 std::fs::rename(&partial, output).map_err(RewriteError::Write)?;
@@ -602,13 +594,6 @@ fn same_file(a: &Path, b: &Path) -> bool {
         let _ = (ma, mb);
         std::fs::canonicalize(a).ok() == std::fs::canonicalize(b).ok()
     }
-}
-
-/// An event, owned.
-enum Step {
-    Subscription(Subscription),
-    Definition,
-    Timed(Option<u64>, Timed),
 }
 
 /// A data-section message with a time.
@@ -983,10 +968,10 @@ impl<W: Write> Pass<'_, W> {
         &mut self,
         t: u64,
         what: Timed,
-        ty: u8,
-        payload: &[u8],
-        in_data: bool,
+        raw: RawMessage<'_>,
+        meta: &crate::read::Metadata,
     ) -> Result<(), RewriteError> {
+        let (ty, payload, in_data) = (raw.ty, raw.payload, meta.in_data_section());
         self.flag_bits(None)?;
         let before = self.rules.window.start_us.is_some_and(|s| (t as f64) < s);
         match what {
