@@ -687,7 +687,7 @@ type FuzzCheck = fn(&[u8]);
 #[test]
 fn fuzz_regressions_pass() {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fuzz_regressions");
-    let targets: [(&str, FuzzCheck); 8] = [
+    let targets: [(&str, FuzzCheck); 9] = [
         ("whole_file", fuzz_checks::whole_file),
         ("stream_chunks", fuzz_checks::stream_chunks),
         ("format_roundtrip", fuzz_checks::format_roundtrip),
@@ -696,6 +696,7 @@ fn fuzz_regressions_pass() {
         ("codegen_log", fuzz_checks::codegen_log),
         ("codegen_text", fuzz_checks::codegen_text),
         ("writer_ops", fuzz_checks::writer_ops),
+        ("rewrite", fuzz_checks::rewrite),
     ];
     let mut ran = 0;
     for (target, check) in targets {
