@@ -618,7 +618,9 @@ pub fn rewrite(data: &[u8]) {
     assert_eq!(back.row_count(), input.row_count(), "every row kept");
     assert_eq!(report.bytes_out, out.len() as u64);
     let mut again = Vec::new();
-    Rewrite::new().run(&out[..], &mut again).expect("the rewritten log rewrites");
+    Rewrite::new()
+        .run(&out[..], &mut again)
+        .expect("the rewritten log rewrites");
     assert!(again == out, "a rewritten log rewrites to itself");
     let seed = data.get(20).copied().unwrap_or(0);
     let window = ulog_runtime::columns::Window {
@@ -627,7 +629,10 @@ pub fn rewrite(data: &[u8]) {
     };
     for mut rules in [
         Rewrite::new().window(window),
-        Rewrite::new().exclude(&[input.subscriptions().first().map_or("", |s| s.name.as_str())]),
+        Rewrite::new().exclude(&[input
+            .subscriptions()
+            .first()
+            .map_or("", |s| s.name.as_str())]),
         Rewrite::new().anonymize(Anonymize::seed(u64::from(seed))),
     ] {
         let mut out = Vec::new();

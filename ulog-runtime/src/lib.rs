@@ -15,6 +15,8 @@
 //!   and the messages of a log as pyulog's `ulog_messages` lists them.
 //! - [`columns`]: a topic instance as typed columns (and, with features, Arrow record
 //!   batches and Parquet files).
+//! - [`analysis`]: what a log says about the flight: modes, statistics, battery, GPS,
+//!   vibration, step responses, spectra, and diagnostics of what went wrong.
 //! - [`tools`]: what pyulog's command-line tools compute (parameters in their formats, a
 //!   multi info value, the KML track, the GPS dump), byte for byte.
 //! - [`file_names`]: safe, unique file names for exports that write a file per topic.
@@ -35,6 +37,7 @@ extern crate self as ulog_runtime;
 
 #[doc(hidden)]
 pub mod __private;
+pub mod analysis;
 #[cfg(feature = "codegen")]
 pub mod codegen;
 pub mod columns;

@@ -32,10 +32,13 @@
 #[cfg(feature = "arrow")]
 pub mod arrow;
 pub mod csv;
+mod fields;
 #[cfg(feature = "parquet")]
 pub mod parquet;
 
 use std::sync::Arc;
+
+pub(crate) use fields::{FieldIndex, Leaf};
 
 use crate::read::{Log, Subscription};
 use crate::schema::{FieldKind, FormatId, Primitive, Schema};

@@ -1,60 +1,10 @@
 //! Row transforms: a row's fields by path, read and written in place ([`RowFields`]), and a
 //! typed struct written back into the file's layout ([`scatter`]).
 
-use std::collections::HashMap;
-
-use crate::columns::{ColumnKind, ColumnSpec, Source};
-use crate::schema::{FormatId, Primitive, Schema};
+pub(crate) use crate::columns::{FieldIndex, Leaf};
+use crate::schema::Primitive;
 use crate::typed::{DecodePlan, TypedFormat, TypedKind};
 use crate::value::Scalar;
-
-/// Where one leaf of a row lives.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Leaf {
-    /// A value of a basic type at this offset.
-    Value(usize, Primitive),
-    /// A `char[N]` array at this offset.
-    Text(usize, usize),
-}
-
-/// The leaves of a format by pyulog's column names (`timestamp`, `q[0]`,
-/// `esc[3].esc_rpm`), padding left out: what [`RowFields`] reads and writes.
-#[derive(Debug, Clone)]
-pub(crate) struct FieldIndex {
-    names: Vec<String>,
-    leaves: HashMap<String, Leaf>,
-}
-
-impl FieldIndex {
-    /// The index of format `id`, if its layout is resolved.
-    pub(crate) fn of(schema: &Schema, id: FormatId) -> Option<FieldIndex> {
-        let spec = ColumnSpec::of(schema, id)?;
-        let mut names = Vec::with_capacity(spec.columns().len());
-        let mut leaves = HashMap::with_capacity(spec.columns().len());
-        for c in spec.columns() {
-            let leaf = match (c.kind, c.source) {
-                // The file's type, not the unwrapped `u64` of the column.
-                (_, Source::Timestamp) => {
-                    Leaf::Value(c.offset, Primitive::from_c_name(&c.ulog_type)?)
-                }
-                (ColumnKind::Value(p), _) => Leaf::Value(c.offset, p),
-                (ColumnKind::Text { len }, _) => Leaf::Text(c.offset, len),
-            };
-            names.push(c.name.clone());
-            leaves.insert(c.name.clone(), leaf);
-        }
-        Some(FieldIndex { names, leaves })
-    }
-
-    /// The leaves, in column order.
-    pub(crate) fn iter(&self) -> impl Iterator<Item = (&str, Leaf)> {
-        self.names.iter().map(|n| (n.as_str(), self.leaves[n]))
-    }
-
-    pub(crate) fn get(&self, name: &str) -> Option<Leaf> {
-        self.leaves.get(name).copied()
-    }
-}
 
 /// Why a field of a row could not be written ([`RowFields`]).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -46,6 +46,7 @@ use std::path::Path;
 pub use anonymize::{Anonymize, Target};
 pub use fields::{FieldError, RowFields};
 
+use crate::columns::FieldIndex;
 use crate::columns::{Admit, Window};
 use crate::read::FileHeader;
 use crate::read::{
@@ -55,7 +56,6 @@ use crate::schema::{Schema, TypeRef};
 use crate::typed::{Topic, TypedDecoder, TypedError, encode_row};
 use crate::value::Value;
 use crate::{Event, ReadError, StreamReader};
-use fields::FieldIndex;
 
 crate::error::debug_as_display!(RewriteError);
 

@@ -9,6 +9,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 use ulog_runtime::Log;
 
+mod analyze;
 mod anonymize;
 mod check_msg;
 mod codegen;
@@ -58,6 +59,8 @@ enum Command {
     Cut(cut::Args),
     /// A new log with positions moved, times shifted and identifiers removed.
     Anonymize(anonymize::Args),
+    /// The flight analysis: modes, statistics, battery, GPS, vibration, diagnostics.
+    Analyze(analyze::Args),
 }
 
 /// An error for the one line `ulog` prints: `ulog: PATH: message`.
@@ -157,6 +160,7 @@ fn run(command: Command, out: &mut impl Write) -> Result<(), Failure> {
         Command::CheckMsg(args) => check_msg::run(&args, out),
         Command::Cut(args) => cut::run(&args, out),
         Command::Anonymize(args) => anonymize::run(&args, out),
+        Command::Analyze(args) => analyze::run(&args, out),
     }
 }
 

@@ -28,7 +28,7 @@ use crate::schema::{Primitive, Schema};
 use crate::value::{Scalar, Value};
 
 use super::RewriteError;
-use super::fields::{FieldIndex, Leaf};
+use crate::columns::{FieldIndex, Leaf};
 use geo::Rotation;
 
 /// Where the positions of an anonymized log go.

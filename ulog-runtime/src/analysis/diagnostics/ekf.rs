@@ -1,0 +1,121 @@
+//! EKF innovation failure: in flight, one of `estimator_status`'s innovation test ratios
+//! (velocity, position, height, magnetometer, airspeed, sideslip) above 1 (the innovation
+//! outside its gate) for at least 2 s without a break: a warning, critical from 5 s. One
+//! finding per episode, per estimator instance and innovation.
+
+use super::{Diagnostic, Episode, Evidence, Severity, secs};
+use crate::analysis::state::FlightState;
+use crate::columns::{FieldIndex, Leaf};
+
+/// The ratio above which an innovation fails its test.
+pub const THRESHOLD: f64 = 1.0;
+/// Episodes at least this long are warnings, µs.
+pub const WARNING_US: u64 = 2_000_000;
+/// And this long critical.
+pub const CRITICAL_US: u64 = 5_000_000;
+
+const RATIOS: [(&str, &str); 6] = [
+    ("vel_test_ratio", "velocity"),
+    ("pos_test_ratio", "position"),
+    ("hgt_test_ratio", "height"),
+    ("mag_test_ratio", "magnetometer"),
+    ("tas_test_ratio", "airspeed"),
+    ("beta_test_ratio", "sideslip"),
+];
+
+/// Where `estimator_status`'s ratios are.
+pub(crate) struct Fields {
+    multi_id: u8,
+    ratios: Vec<(usize, Leaf)>,
+}
+
+impl Fields {
+    pub(crate) fn bind(multi_id: u8, index: &FieldIndex) -> Option<Fields> {
+        let ratios: Vec<(usize, Leaf)> = RATIOS
+            .iter()
+            .enumerate()
+            .filter_map(|(k, (name, _))| Some((k, index.get(name)?)))
+            .collect();
+        (!ratios.is_empty()).then_some(Fields { multi_id, ratios })
+    }
+}
+
+#[derive(Debug, Clone, Default)]
+struct Track {
+    episode: Episode,
+    worst: f64,
+}
+
+/// Every estimator's innovations.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Ekf {
+    tracks: Vec<((u8, usize), Track)>,
+    found: Vec<(u8, usize, u64, u64, f64)>,
+}
+
+impl Ekf {
+    pub(crate) fn row(&mut self, f: &Fields, data: &[u8], t: u64, state: &FlightState) {
+        let flying = state.flying();
+        for &(k, leaf) in &f.ratios {
+            let Some(r) = leaf.f64(data).filter(|r| r.is_finite()) else {
+                continue;
+            };
+            let key = (f.multi_id, k);
+            let track = match self.tracks.iter().position(|(x, _)| *x == key) {
+                Some(i) => &mut self.tracks[i].1,
+                None => {
+                    self.tracks.push((key, Track::default()));
+                    &mut self.tracks.last_mut().expect("pushed").1
+                }
+            };
+            let bad = flying && r > THRESHOLD;
+            if bad {
+                track.worst = track.worst.max(r);
+            }
+            if let Some((start, end)) = track.episode.see(bad, t) {
+                if end - start >= WARNING_US {
+                    self.found.push((f.multi_id, k, start, end, track.worst));
+                }
+                track.worst = 0.0;
+            }
+        }
+    }
+
+    pub(crate) fn finish(mut self, end: u64) -> Vec<Diagnostic> {
+        for ((m, k), track) in &mut self.tracks {
+            if let Some((start, stop)) = track.episode.close(end)
+                && stop - start >= WARNING_US
+            {
+                self.found.push((*m, *k, start, stop, track.worst));
+            }
+        }
+        self.found
+            .into_iter()
+            .map(|(multi_id, k, start, end, ratio)| {
+                let name = RATIOS[k].1;
+                Diagnostic {
+                    id: "ekf_failure".to_owned(),
+                    summary: format!(
+                        "EKF {multi_id} {name} innovation test ratio above 1 (up to {ratio:.2}) \
+                         for {:.1} s from {:.1} s in flight",
+                        secs(end - start),
+                        secs(start)
+                    ),
+                    severity: if end - start >= CRITICAL_US {
+                        Severity::Critical
+                    } else {
+                        Severity::Warning
+                    },
+                    timestamp_us: start,
+                    end_timestamp_us: Some(end),
+                    evidence: Evidence::EkfFailure {
+                        multi_id,
+                        innovation: name.to_owned(),
+                        test_ratio: ratio,
+                        threshold: THRESHOLD,
+                    },
+                }
+            })
+            .collect()
+    }
+}

@@ -1,0 +1,544 @@
+//! Flight analysis: what a log says about the flight, in one pass over its rows. Flight
+//! modes and VTOL states, armed and in-air intervals, flight statistics, battery, GPS
+//! quality and track, vibration, non-default parameters, per-field statistics, the rate
+//! controllers' step responses and the gyro and accelerometer spectra, and diagnostics of
+//! what went wrong (battery brownout, EKF innovation failure, GPS interference, a motor
+//! failure, RC loss), each with its rule in its doc comment.
+//!
+//! The JSON ([`Analysis`] with serde) uses the key names of PX4's Flight Review v2
+//! converter (`flight_modes`, `stats.total_distance_m`, `battery.min_voltage_v`...) where it
+//! has the same fact; what it adds has keys of its own. A fact the log cannot give (a topic
+//! or field it lacks, a version that logs it otherwise) is absent (`null`, or an empty
+//! list) and [`Analysis::missing`] says why; nothing fails for it.
+//!
+//! Each concern is its own file, a consumer of the same rows: [`state`] (armed, in air,
+//! mode), [`modes`], [`motion`], [`sensors`], [`fields`], [`params`], [`diagnostics`],
+//! [`spectral`].
+//!
+//! ```no_run
+//! # fn main() -> Result<(), ulog_runtime::ReadError> {
+//! let log = ulog_runtime::Log::open("flight.ulg")?;
+//! let analysis = ulog_runtime::analysis::Analysis::of_log(&log);
+//! for m in &analysis.flight_modes {
+//!     println!("{} for {:.1} s", m.mode, m.duration_s);
+//! }
+//! for d in &analysis.diagnostics {
+//!     println!("{:?}: {}", d.severity, d.summary);
+//! }
+//! # Ok(()) }
+//! ```
+
+pub mod diagnostics;
+mod fields;
+mod modes;
+mod motion;
+mod params;
+mod sensors;
+mod spectral;
+mod state;
+mod summary;
+
+use std::io::Read;
+
+use crate::read::{Log, Metadata, Row, Subscription};
+use crate::{Event, ReadError, StreamReader};
+
+pub use diagnostics::{Diagnostic, Evidence, Severity};
+
+/// Everything the analysis found ([module docs](self)).
+#[derive(Debug, Clone, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[non_exhaustive]
+pub struct Analysis {
+    /// Segments of `vehicle_status.nav_state`, with PX4's mode names.
+    pub flight_modes: Vec<ModeSegment>,
+    /// VTOL states (multicopter, fixed-wing, transition) of a VTOL.
+    pub vtol_states: Vec<VtolSegment>,
+    /// When the vehicle was armed.
+    pub armed: Vec<Interval>,
+    /// When it was in the air (from `vehicle_land_detected`): takeoffs and landings.
+    pub flights: Vec<Interval>,
+    /// Motion, from `vehicle_local_position`, `vehicle_attitude` and
+    /// `vehicle_angular_velocity`.
+    pub stats: Stats,
+    /// `battery_status`.
+    pub battery: Battery,
+    /// `vehicle_gps_position` (or `sensor_gps`).
+    pub gps_quality: GpsQuality,
+    /// `vehicle_imu_status.accel_vibration_metric`.
+    pub vibration: Vibration,
+    /// Parameters whose value is not the log's default.
+    pub non_default_params: Vec<NonDefault>,
+    /// The GPS track, one point a second, with the flight mode at each point.
+    pub gps_track: Vec<TrackPoint>,
+    /// Minimum, maximum and mean of every numeric field of every topic instance.
+    pub field_stats: Vec<FieldStat>,
+    /// What went wrong (see [`diagnostics`]).
+    pub diagnostics: Vec<Diagnostic>,
+    /// The rate controllers' step responses, per axis.
+    pub step_response: Vec<AxisResponse>,
+    /// Power spectral densities of the gyro and the accelerometer, per axis.
+    pub spectra: Vec<SpectrumOf>,
+    /// The facts the log could not give, and why.
+    pub missing: Vec<Missing>,
+}
+
+/// A stretch of one flight mode.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct ModeSegment {
+    /// PX4's name (`Position`, `Mission`, `RTL`...; `Unknown` for a number PX4 does not name).
+    pub mode: String,
+    /// `nav_state`.
+    pub mode_id: u8,
+    /// µs (log time).
+    pub start_us: u64,
+    /// µs: the next mode's start, or the log's last row.
+    pub end_us: u64,
+    /// Seconds.
+    pub duration_s: f64,
+}
+
+/// A stretch of one VTOL state.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct VtolSegment {
+    /// `MC`, `FW` or `Transition`.
+    pub state: String,
+    /// µs.
+    pub start_us: u64,
+    /// µs.
+    pub end_us: u64,
+}
+
+/// A time interval.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct Interval {
+    /// µs.
+    pub start_us: u64,
+    /// µs.
+    pub end_us: u64,
+}
+
+/// Motion statistics (`null` when the log lacks what they come from).
+#[derive(Debug, Clone, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct Motion {
+    /// Path length, m: the 3-D distance between consecutive finite positions.
+    pub total_distance_m: Option<f64>,
+    /// Highest minus lowest altitude, m.
+    pub max_altitude_diff_m: Option<f64>,
+    /// Largest 3-D speed, m/s.
+    pub max_speed_m_s: Option<f64>,
+    /// Largest horizontal speed, m/s.
+    pub max_horizontal_speed_m_s: Option<f64>,
+    /// Largest climb rate, m/s.
+    pub max_speed_up_m_s: Option<f64>,
+    /// Largest sink rate, m/s.
+    pub max_speed_down_m_s: Option<f64>,
+    /// Mean 3-D speed, m/s.
+    pub avg_speed_m_s: Option<f64>,
+    /// Largest tilt from level, degrees.
+    pub max_tilt_deg: Option<f64>,
+    /// Largest rotation rate, deg/s.
+    pub max_rotation_speed_deg_s: Option<f64>,
+}
+
+/// Motion statistics over the whole log (flight-review-rs's `stats`) and restricted to the
+/// armed time.
+#[derive(Debug, Clone, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct Stats {
+    /// Over every row.
+    #[cfg_attr(feature = "serde", serde(flatten))]
+    pub all: Motion,
+    /// Over the rows while armed.
+    pub armed: Motion,
+}
+
+/// One battery instance.
+#[derive(Debug, Clone, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct BatteryInstance {
+    /// The instance.
+    pub multi_id: u8,
+    /// Mean current over valid readings, A.
+    pub avg_current_a: Option<f64>,
+    /// Largest current, A.
+    pub max_current_a: Option<f64>,
+    /// Charge drawn (the last valid reading), mAh.
+    pub discharged_mah: Option<f64>,
+    /// Lowest voltage, V.
+    pub min_voltage_v: Option<f64>,
+    /// Cells: from the parameters (`BAT1_N_CELLS`...) or the `cell_count` field, else
+    /// estimated from the highest voltage.
+    pub cells: Option<u32>,
+}
+
+/// The batteries: instance 0's facts at the top (flight-review-rs's keys), every instance
+/// in `instances`.
+#[derive(Debug, Clone, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct Battery {
+    /// Instance 0's mean current, A.
+    pub avg_current_a: Option<f64>,
+    /// Instance 0's largest current, A.
+    pub max_current_a: Option<f64>,
+    /// Instance 0's charge drawn, mAh.
+    pub discharged_mah: Option<f64>,
+    /// Instance 0's lowest voltage, V.
+    pub min_voltage_v: Option<f64>,
+    /// Every instance.
+    pub instances: Vec<BatteryInstance>,
+}
+
+/// GPS quality (of the GPS topic's instance 0).
+#[derive(Debug, Clone, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct GpsQuality {
+    /// Fewest satellites used.
+    pub min_satellites: Option<u32>,
+    /// Most satellites used.
+    pub max_satellites: Option<u32>,
+    /// Largest horizontal dilution of precision.
+    pub max_hdop: Option<f64>,
+    /// Largest horizontal position accuracy, m (over rows with a 3-D fix).
+    pub max_eph_m: Option<f64>,
+    /// Largest vertical position accuracy, m (over rows with a 3-D fix).
+    pub max_epv_m: Option<f64>,
+    /// Every `fix_type` seen, ascending.
+    pub fix_types_seen: Vec<u8>,
+    /// Largest `jamming_indicator` (0–255), where the topic has it.
+    pub max_jamming_indicator: Option<f64>,
+    /// Largest `noise_per_ms`, where the topic has it.
+    pub max_noise_per_ms: Option<f64>,
+    /// Every `jamming_state` seen (1 ok, 2 warning, 3 critical), where the topic has it.
+    pub jamming_states_seen: Vec<u8>,
+}
+
+/// One IMU's vibration.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct ImuVibration {
+    /// The `vehicle_imu_status` instance.
+    pub multi_id: u8,
+    /// Mean, m/s².
+    pub mean: f64,
+    /// Largest, m/s².
+    pub max: f64,
+    /// `good`, `warning` or `critical`.
+    pub status: String,
+}
+
+/// Vibration: every IMU pooled at the top (flight-review-rs's keys), each in `imus`. The
+/// status is the worse of the mean's (good below 4.905 m/s², critical from 9.81) and the
+/// largest value's (good below 9.81, critical from 19.62), PX4's thresholds.
+#[derive(Debug, Clone, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct Vibration {
+    /// Mean over every IMU, m/s².
+    pub accel_vibe_mean: Option<f64>,
+    /// Largest of every IMU, m/s².
+    pub accel_vibe_max: Option<f64>,
+    /// `good`, `warning`, `critical`, or empty without data.
+    pub status: String,
+    /// Every IMU.
+    pub imus: Vec<ImuVibration>,
+}
+
+/// A parameter whose value is not the default the log gives.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct NonDefault {
+    /// The parameter.
+    pub name: String,
+    /// Its value at the start (initial).
+    pub value: f64,
+    /// Its default (the system default, else the configuration's).
+    pub default: f64,
+}
+
+/// A point of the GPS track.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct TrackPoint {
+    /// Degrees north.
+    pub lat_deg: f64,
+    /// Degrees east.
+    pub lon_deg: f64,
+    /// Meters above mean sea level.
+    pub alt_m: f64,
+    /// µs.
+    pub timestamp_us: u64,
+    /// The flight mode (`nav_state`) then, if known.
+    pub mode_id: Option<u8>,
+}
+
+/// One numeric field's statistics over one topic instance.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct FieldStat {
+    /// The topic.
+    pub topic: String,
+    /// The instance.
+    pub multi_id: u8,
+    /// pyulog's field name (`q[0]`, `esc[3].esc_rpm`).
+    pub field: String,
+    /// Smallest finite value.
+    pub min: f64,
+    /// Largest finite value.
+    pub max: f64,
+    /// Mean of the finite values.
+    pub mean: f64,
+    /// Finite values.
+    pub count: u64,
+}
+
+/// One axis's step response (see `spectral::StepResponse` in the source for the method).
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct AxisResponse {
+    /// `roll`, `pitch` or `yaw`.
+    pub axis: String,
+    /// The rate of the resampled signals, Hz.
+    pub sample_rate_hz: f64,
+    /// Time after the step, s.
+    pub time_s: Vec<f64>,
+    /// The response to setpoints up to 500 deg/s (1 is the setpoint).
+    pub response: Option<Vec<f64>>,
+    /// Windows averaged into it.
+    pub window_count: usize,
+    /// The response to setpoints above 500 deg/s, if there were enough.
+    pub response_high: Option<Vec<f64>>,
+    /// Windows averaged into that.
+    pub window_count_high: usize,
+}
+
+/// A power spectral density of one sensor axis, in flight.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct SpectrumOf {
+    /// `gyro` or `accel`.
+    pub sensor: String,
+    /// `x`, `y` or `z`.
+    pub axis: String,
+    /// The sensor's rate, Hz.
+    pub sample_rate_hz: f64,
+    /// Segments averaged.
+    pub segments: usize,
+    /// Frequencies, Hz.
+    pub freq_hz: Vec<f64>,
+    /// Densities: (rad/s)²/Hz for the gyro, (m/s²)²/Hz for the accelerometer.
+    pub psd: Vec<f64>,
+}
+
+/// A fact the log could not give.
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct Missing {
+    /// Which (`flight_modes`, `stats`, `battery`...).
+    pub fact: String,
+    /// Why: the topic or field it lacks, or the damage that hid it.
+    pub reason: String,
+}
+
+/// The analysis's consumers, fed the rows of one pass in file order: made once the log's
+/// definitions are read ([`Analyzer::new`]), given every event or row ([`Analyzer::event`],
+/// [`Analyzer::row`]), then [`Analyzer::finish`]ed.
+#[derive(Default)]
+pub struct Analyzer {
+    state: state::FlightState,
+    modes: modes::Modes,
+    motion: motion::MotionStats,
+    sensors: sensors::Sensors,
+    fields: fields::FieldStats,
+    diagnostics: diagnostics::Diagnostics,
+    spectral: motion::Spectral,
+    /// Per subscription: its topics' fields, bound at its first row.
+    routes: Vec<Option<Route>>,
+    /// Bytes the reader skipped as damaged.
+    damaged_bytes: u64,
+    /// The last row's time.
+    last_timestamp: u64,
+}
+
+impl std::fmt::Debug for Analyzer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Analyzer").finish_non_exhaustive()
+    }
+}
+
+/// Which consumers take a subscription's rows, and where their fields are.
+struct Route {
+    state: Option<state::Fields>,
+    motion: Option<motion::Fields>,
+    sensors: Option<sensors::Fields>,
+    diagnostics: Option<diagnostics::Fields>,
+    spectral: Option<motion::SpectralFields>,
+    fields: Option<usize>,
+}
+
+impl Analyzer {
+    /// An analyzer for a log with these definitions (its parameters give battery cell
+    /// counts), nothing seen.
+    pub fn new(meta: &Metadata) -> Analyzer {
+        let mut a = Analyzer::default();
+        a.diagnostics.start(meta);
+        a
+    }
+
+    /// Takes one event of a pass over a log, in file order.
+    #[inline]
+    pub fn event(&mut self, event: &Event<'_>) {
+        match event {
+            Event::Row(row) => self.row(row),
+            Event::Diagnostic(d) => {
+                if let Some(r) = d.damaged_range() {
+                    self.damaged_bytes += r.end - r.start;
+                }
+            }
+            _ => {}
+        }
+    }
+
+    /// Takes one row, in file order.
+    #[inline]
+    pub fn row(&mut self, row: &Row<'_>) {
+        let i = row.subscription.index();
+        if self.routes.len() <= i {
+            self.routes.resize_with(i + 1, || None);
+        }
+        if self.routes[i].is_none() {
+            self.routes[i] = Some(self.route(row.subscription, row.schema()));
+        }
+        let route = self.routes[i].as_ref().expect("just made");
+        let t = row.timestamp;
+        // The log's end: its last row (a topic whose timestamp means something else,
+        // as `mission`'s, would stretch a maximum).
+        self.last_timestamp = t;
+        if let Some(f) = &route.state {
+            self.state.row(f, row.data, t, &mut self.modes);
+        }
+        if let Some(k) = route.fields {
+            self.fields.row(k, row.data);
+        }
+        if route.motion.is_none()
+            && route.sensors.is_none()
+            && route.diagnostics.is_none()
+            && route.spectral.is_none()
+        {
+            return;
+        }
+        if let Some(f) = &route.motion {
+            self.motion.row(f, row.data, &self.state);
+        }
+        if let Some(f) = &route.sensors {
+            self.sensors.row(f, row.data, t, &self.state);
+        }
+        if let Some(f) = &route.diagnostics {
+            self.diagnostics.row(f, row.data, t, &self.state);
+        }
+        if let Some(f) = &route.spectral {
+            self.spectral.row(f, row.data, t, &self.state);
+        }
+    }
+
+    fn route(&mut self, sub: &Subscription, schema: &crate::schema::Schema) -> Route {
+        let index = sub
+            .format()
+            .and_then(|id| crate::columns::FieldIndex::of(schema, id));
+        let Some(index) = index else {
+            return Route {
+                state: None,
+                motion: None,
+                sensors: None,
+                diagnostics: None,
+                spectral: None,
+                fields: None,
+            };
+        };
+        let name = sub.name.as_str();
+        Route {
+            state: state::Fields::bind(name, &index),
+            motion: motion::Fields::bind(name, &index),
+            sensors: sensors::Fields::bind(name, sub.multi_id, &index),
+            diagnostics: diagnostics::Fields::bind(name, sub.multi_id, &index),
+            spectral: motion::SpectralFields::bind(name, &index),
+            fields: self.fields.bind(sub, schema),
+        }
+    }
+
+    /// The analysis, with what the log's metadata adds (parameters, defaults).
+    pub fn finish(self, meta: &Metadata) -> Analysis {
+        let end = self.last_timestamp;
+        let mut missing = Vec::new();
+        let (flight_modes, vtol_states, armed, flights) =
+            self.modes.finish(end, &self.state, &mut missing);
+        let stats = self.motion.finish(&mut missing);
+        let (battery, gps_quality, vibration, gps_track) =
+            self.sensors.finish(meta, &self.modes, &mut missing);
+        let diagnostics = self.diagnostics.finish(end);
+        let (step_response, spectra) = self.spectral.finish(&mut missing);
+        if self.damaged_bytes > 0 {
+            missing.push(Missing {
+                fact: "every fact".to_owned(),
+                reason: format!(
+                    "{} damaged bytes of the log were skipped: the rows in them are not counted",
+                    self.damaged_bytes
+                ),
+            });
+        }
+        Analysis {
+            flight_modes,
+            vtol_states,
+            armed,
+            flights,
+            stats,
+            battery,
+            gps_quality,
+            vibration,
+            non_default_params: params::non_default(meta, &mut missing),
+            gps_track,
+            field_stats: self.fields.finish(),
+            diagnostics,
+            step_response,
+            spectra,
+            missing,
+        }
+    }
+}
+
+impl Analysis {
+    /// The analysis of a log read as a stream (one pass, memory bounded by the analysis,
+    /// not by the log).
+    pub fn of_reader(input: impl Read) -> Result<Analysis, ReadError> {
+        let mut reader = StreamReader::new(input)?;
+        let mut analyzer: Option<Analyzer> = None;
+        reader.for_each_message(|meta, event, _| {
+            analyzer
+                .get_or_insert_with(|| Analyzer::new(meta))
+                .event(&event);
+            Ok::<(), ReadError>(())
+        })?;
+        let meta = reader.metadata();
+        Ok(analyzer.unwrap_or_else(|| Analyzer::new(meta)).finish(meta))
+    }
+
+    /// The analysis of a whole-file log.
+    pub fn of_log(log: &Log<'_>) -> Analysis {
+        let mut analyzer = Analyzer::new(log.metadata());
+        for row in log.data() {
+            analyzer.row(&row);
+        }
+        for d in log.diagnostics() {
+            if let Some(r) = d.damaged_range() {
+                analyzer.damaged_bytes += r.end - r.start;
+            }
+        }
+        analyzer.finish(log.metadata())
+    }
+}
+
+#[cfg(test)]
+mod tests;

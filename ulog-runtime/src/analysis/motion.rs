@@ -1,0 +1,405 @@
+//! How the vehicle moved: path length, altitude range and speeds from
+//! `vehicle_local_position` (NED), tilt from `vehicle_attitude`'s quaternion, rotation rate
+//! from `vehicle_angular_velocity` (older logs: `vehicle_attitude`'s rates or
+//! `sensor_combined`'s gyro), over the whole log and while armed; and the spectral
+//! analyses of the rates and accelerations in flight.
+
+use super::spectral::{StepResponse, Welch};
+use super::state::FlightState;
+use super::{AxisResponse, Missing, Motion, SpectrumOf, Stats};
+use crate::columns::{FieldIndex, Leaf};
+
+/// Where a motion topic's fields are.
+pub(super) enum Fields {
+    Local {
+        pos: [Leaf; 3],
+        vel: Option<[Leaf; 3]>,
+    },
+    Attitude {
+        q: [Leaf; 4],
+    },
+    /// Body rates in rad/s, and whether they are the preferred source.
+    Rates {
+        xyz: [Leaf; 3],
+        preferred: bool,
+    },
+}
+
+fn three(index: &FieldIndex, names: [&str; 3]) -> Option<[Leaf; 3]> {
+    Some([
+        index.get(names[0])?,
+        index.get(names[1])?,
+        index.get(names[2])?,
+    ])
+}
+
+impl Fields {
+    pub(super) fn bind(topic: &str, index: &FieldIndex) -> Option<Fields> {
+        match topic {
+            "vehicle_local_position" => Some(Fields::Local {
+                pos: three(index, ["x", "y", "z"])?,
+                vel: three(index, ["vx", "vy", "vz"]),
+            }),
+            "vehicle_attitude" => {
+                let q = Some([
+                    index.get("q[0]")?,
+                    index.get("q[1]")?,
+                    index.get("q[2]")?,
+                    index.get("q[3]")?,
+                ]);
+                q.map(|q| Fields::Attitude { q })
+            }
+            "vehicle_angular_velocity" => Some(Fields::Rates {
+                xyz: three(index, ["xyz[0]", "xyz[1]", "xyz[2]"])?,
+                preferred: true,
+            }),
+            "sensor_combined" => Some(Fields::Rates {
+                xyz: three(index, ["gyro_rad[0]", "gyro_rad[1]", "gyro_rad[2]"])?,
+                preferred: false,
+            }),
+            _ => None,
+        }
+    }
+}
+
+/// Accumulates one [`Motion`].
+#[derive(Debug, Clone, Default)]
+struct Acc {
+    last_pos: Option<[f64; 3]>,
+    distance: Option<f64>,
+    z: Option<(f64, f64)>,
+    max_speed: Option<f64>,
+    max_h: Option<f64>,
+    max_up: Option<f64>,
+    max_down: Option<f64>,
+    speed_sum: f64,
+    speed_n: u64,
+    max_tilt: Option<f64>,
+    max_rate: Option<f64>,
+    max_rate_other: Option<f64>,
+}
+
+fn max(a: &mut Option<f64>, v: f64) {
+    if v.is_finite() {
+        *a = Some(a.map_or(v, |x| x.max(v)));
+    }
+}
+
+impl Acc {
+    fn local(&mut self, pos: Option<[f64; 3]>, vel: Option<[f64; 3]>) {
+        if let Some(p) = pos {
+            if let Some(l) = self.last_pos {
+                let d =
+                    ((p[0] - l[0]).powi(2) + (p[1] - l[1]).powi(2) + (p[2] - l[2]).powi(2)).sqrt();
+                *self.distance.get_or_insert(0.0) += d;
+            } else {
+                self.distance.get_or_insert(0.0);
+            }
+            self.last_pos = Some(p);
+            // Altitude is -z (NED).
+            let z = -p[2];
+            self.z = Some(self.z.map_or((z, z), |(lo, hi)| (lo.min(z), hi.max(z))));
+        }
+        if let Some(v) = vel {
+            let h = v[0].hypot(v[1]);
+            let s = h.hypot(v[2]);
+            max(&mut self.max_speed, s);
+            max(&mut self.max_h, h);
+            max(&mut self.max_up, (-v[2]).max(0.0));
+            max(&mut self.max_down, v[2].max(0.0));
+            self.speed_sum += s;
+            self.speed_n += 1;
+        }
+    }
+
+    fn finish(&self) -> Motion {
+        Motion {
+            total_distance_m: self.distance,
+            max_altitude_diff_m: self.z.map(|(lo, hi)| hi - lo),
+            max_speed_m_s: self.max_speed,
+            max_horizontal_speed_m_s: self.max_h,
+            max_speed_up_m_s: self.max_up,
+            max_speed_down_m_s: self.max_down,
+            avg_speed_m_s: (self.speed_n > 0).then(|| self.speed_sum / self.speed_n as f64),
+            max_tilt_deg: self.max_tilt,
+            max_rotation_speed_deg_s: self.max_rate.or(self.max_rate_other),
+        }
+    }
+}
+
+/// The statistics over every row and over the armed rows.
+#[derive(Debug, Clone, Default)]
+pub(super) struct MotionStats {
+    all: Acc,
+    armed: Acc,
+    seen_local: bool,
+    seen_attitude: bool,
+    seen_rates: bool,
+}
+
+/// Finite values of three leaves.
+fn read3(data: &[u8], leaves: &[Leaf; 3]) -> Option<[f64; 3]> {
+    let v = [
+        leaves[0].f64(data)?,
+        leaves[1].f64(data)?,
+        leaves[2].f64(data)?,
+    ];
+    v.iter().all(|x| x.is_finite()).then_some(v)
+}
+
+impl MotionStats {
+    pub(super) fn row(&mut self, f: &Fields, data: &[u8], state: &FlightState) {
+        let accs: &mut [&mut Acc] = if state.armed {
+            &mut [&mut self.all, &mut self.armed]
+        } else {
+            &mut [&mut self.all]
+        };
+        match f {
+            Fields::Local { pos, vel } => {
+                self.seen_local = true;
+                let p = read3(data, pos);
+                let v = vel.as_ref().and_then(|v| read3(data, v));
+                for a in accs.iter_mut() {
+                    a.local(p, v);
+                }
+            }
+            Fields::Attitude { q } => {
+                self.seen_attitude = true;
+                let (Some(q1), Some(q2)) = (q[1].f64(data), q[2].f64(data)) else {
+                    return;
+                };
+                // The angle between the body's z axis and the vertical.
+                let tilt = (1.0 - 2.0 * (q1 * q1 + q2 * q2))
+                    .clamp(-1.0, 1.0)
+                    .acos()
+                    .to_degrees();
+                for a in accs.iter_mut() {
+                    max(&mut a.max_tilt, tilt);
+                }
+            }
+            Fields::Rates { xyz, preferred } => {
+                self.seen_rates = true;
+                if let Some(r) = read3(data, xyz) {
+                    let rate = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2])
+                        .sqrt()
+                        .to_degrees();
+                    for a in accs.iter_mut() {
+                        if *preferred {
+                            max(&mut a.max_rate, rate);
+                        } else {
+                            max(&mut a.max_rate_other, rate);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    pub(super) fn finish(&self, missing: &mut Vec<Missing>) -> Stats {
+        for (seen, fact, topic) in [
+            (
+                self.seen_local,
+                "stats: distance, altitude, speeds",
+                "vehicle_local_position",
+            ),
+            (
+                self.seen_attitude,
+                "stats.max_tilt_deg",
+                "vehicle_attitude (with q)",
+            ),
+            (
+                self.seen_rates,
+                "stats.max_rotation_speed_deg_s",
+                "vehicle_angular_velocity or sensor_combined",
+            ),
+        ] {
+            if !seen {
+                missing.push(Missing {
+                    fact: fact.to_owned(),
+                    reason: format!("the log has no {topic} rows"),
+                });
+            }
+        }
+        Stats {
+            all: self.all.finish(),
+            armed: self.armed.finish(),
+        }
+    }
+}
+
+/// Where the spectral analyses' signals are.
+pub(super) enum SpectralFields {
+    /// Rate setpoints, rad/s.
+    Setpoint([Leaf; 3]),
+    /// Measured rates, rad/s; raw sensor or controller input.
+    Gyro { xyz: [Leaf; 3], raw: bool },
+    /// Accelerations, m/s²; raw sensor or filtered.
+    Accel { xyz: [Leaf; 3], raw: bool },
+    /// Both, of `sensor_combined`.
+    Combined { gyro: [Leaf; 3], accel: [Leaf; 3] },
+}
+
+impl SpectralFields {
+    pub(super) fn bind(topic: &str, index: &FieldIndex) -> Option<SpectralFields> {
+        let xyz = || three(index, ["xyz[0]", "xyz[1]", "xyz[2]"]);
+        match topic {
+            "vehicle_rates_setpoint" => Some(SpectralFields::Setpoint(three(
+                index,
+                ["roll", "pitch", "yaw"],
+            )?)),
+            "vehicle_angular_velocity" => Some(SpectralFields::Gyro {
+                xyz: xyz()?,
+                raw: false,
+            }),
+            "vehicle_acceleration" => Some(SpectralFields::Accel {
+                xyz: xyz()?,
+                raw: false,
+            }),
+            "sensor_combined" => Some(SpectralFields::Combined {
+                gyro: three(index, ["gyro_rad[0]", "gyro_rad[1]", "gyro_rad[2]"])?,
+                accel: three(
+                    index,
+                    [
+                        "accelerometer_m_s2[0]",
+                        "accelerometer_m_s2[1]",
+                        "accelerometer_m_s2[2]",
+                    ],
+                )?,
+            }),
+            _ => None,
+        }
+    }
+}
+
+/// The step responses and spectra, fed in flight.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Spectral {
+    /// Per axis: from the controller's measured rate, and from the raw gyro (older logs).
+    steps: [StepResponse; 3],
+    steps_raw: [StepResponse; 3],
+    gyro_raw: [Welch; 3],
+    gyro: [Welch; 3],
+    accel_raw: [Welch; 3],
+    accel: [Welch; 3],
+    seen_setpoint: bool,
+}
+
+impl Spectral {
+    pub(super) fn row(&mut self, f: &SpectralFields, data: &[u8], t: u64, state: &FlightState) {
+        let keep = state.flying();
+        match f {
+            SpectralFields::Setpoint(xyz) => {
+                self.seen_setpoint = true;
+                for (k, leaf) in xyz.iter().enumerate() {
+                    if let Some(v) = leaf.f64(data) {
+                        self.steps[k].setpoint(v.to_degrees());
+                        self.steps_raw[k].setpoint(v.to_degrees());
+                    }
+                }
+            }
+            SpectralFields::Gyro { xyz, raw } => {
+                for (k, leaf) in xyz.iter().enumerate() {
+                    if let Some(v) = leaf.f64(data) {
+                        let (steps, welch) = if *raw {
+                            (&mut self.steps_raw, &mut self.gyro_raw)
+                        } else {
+                            (&mut self.steps, &mut self.gyro)
+                        };
+                        if self.seen_setpoint {
+                            steps[k].gyro(t, v.to_degrees(), keep);
+                        }
+                        welch[k].push(t, v, keep);
+                    }
+                }
+            }
+            SpectralFields::Accel { xyz, raw } => {
+                for (k, leaf) in xyz.iter().enumerate() {
+                    if let Some(v) = leaf.f64(data) {
+                        let welch = if *raw {
+                            &mut self.accel_raw
+                        } else {
+                            &mut self.accel
+                        };
+                        welch[k].push(t, v, keep);
+                    }
+                }
+            }
+            SpectralFields::Combined { gyro, accel } => {
+                self.row(
+                    &SpectralFields::Gyro {
+                        xyz: *gyro,
+                        raw: true,
+                    },
+                    data,
+                    t,
+                    state,
+                );
+                self.row(
+                    &SpectralFields::Accel {
+                        xyz: *accel,
+                        raw: true,
+                    },
+                    data,
+                    t,
+                    state,
+                );
+            }
+        }
+    }
+
+    pub(super) fn finish(self, missing: &mut Vec<Missing>) -> (Vec<AxisResponse>, Vec<SpectrumOf>) {
+        let mut responses = Vec::new();
+        let names = ["roll", "pitch", "yaw"];
+        for (k, (ctrl, raw)) in self.steps.into_iter().zip(self.steps_raw).enumerate() {
+            // The controller's input when the log has it, the raw gyro otherwise.
+            if let Some(r) = ctrl.finish().or_else(|| raw.finish()) {
+                responses.push(AxisResponse {
+                    axis: names[k].to_owned(),
+                    sample_rate_hz: r.sample_rate_hz,
+                    time_s: r.time_s,
+                    window_count: r.low.as_ref().map_or(0, |l| l.0),
+                    response: r.low.map(|l| l.1),
+                    window_count_high: r.high.as_ref().map_or(0, |h| h.0),
+                    response_high: r.high.map(|h| h.1),
+                });
+            }
+        }
+        if responses.is_empty() {
+            missing.push(Missing {
+                fact: "step_response".to_owned(),
+                reason: if self.seen_setpoint {
+                    "no axis had 10 one-second windows in flight with a rate setpoint above 20 deg/s"
+                } else {
+                    "the log has no vehicle_rates_setpoint rows"
+                }
+                .to_owned(),
+            });
+        }
+        let mut spectra = Vec::new();
+        for (sensor, raw, other) in [
+            ("gyro", self.gyro_raw, self.gyro),
+            ("accel", self.accel_raw, self.accel),
+        ] {
+            for (k, (r, o)) in raw.into_iter().zip(other).enumerate() {
+                // The raw sensor when the log has it (filter tuning needs what it filters).
+                if let Some(s) = r.finish().or_else(|| o.finish()) {
+                    spectra.push(SpectrumOf {
+                        sensor: sensor.to_owned(),
+                        axis: ["x", "y", "z"][k].to_owned(),
+                        sample_rate_hz: s.sample_rate_hz,
+                        segments: s.segments,
+                        freq_hz: s.freq_hz,
+                        psd: s.density,
+                    });
+                }
+            }
+        }
+        if spectra.is_empty() {
+            missing.push(Missing {
+                fact: "spectra".to_owned(),
+                reason: "no gyro or accelerometer run in flight as long as a segment".to_owned(),
+            });
+        }
+        (responses, spectra)
+    }
+}

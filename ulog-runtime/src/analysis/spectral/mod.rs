@@ -1,0 +1,56 @@
+//! Spectral analyses of streamed signals: Welch's power spectral density ([`Welch`]) and
+//! the rate controller's step response by Wiener deconvolution ([`StepResponse`]), over a
+//! small FFT of our own ([`fft`]).
+
+pub(crate) mod fft;
+mod psd;
+mod step;
+
+pub(crate) use psd::Welch;
+pub(crate) use step::StepResponse;
+
+/// The median of the first intervals between samples, µs: a signal's sampling interval.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Interval {
+    last: Option<u64>,
+    seen: Vec<u64>,
+    median: Option<u64>,
+}
+
+/// Intervals looked at before the median is taken.
+const INTERVALS: usize = 64;
+
+impl Interval {
+    /// Sees a sample's time; the median interval once known.
+    pub(crate) fn see(&mut self, t: u64) -> Option<u64> {
+        if self.median.is_none() {
+            if let Some(last) = self.last
+                && t > last
+            {
+                self.seen.push(t - last);
+            }
+            if self.seen.len() >= INTERVALS {
+                self.seen.sort_unstable();
+                self.median = Some(self.seen[self.seen.len() / 2].max(1));
+                self.seen = Vec::new();
+            }
+        }
+        self.last = Some(t);
+        self.median
+    }
+}
+
+/// The symmetric Hann window of `n` points (`0.5 - 0.5 cos(2πk/(n-1))`), as numpy's
+/// `hanning`.
+pub(crate) fn hann_symmetric(n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|k| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * k as f64 / (n - 1) as f64).cos())
+        .collect()
+}
+
+/// The periodic Hann window of `n` points (`0.5 - 0.5 cos(2πk/n)`), as scipy's `welch`.
+pub(crate) fn hann_periodic(n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|k| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * k as f64 / n as f64).cos())
+        .collect()
+}

@@ -1,0 +1,179 @@
+//! Welch's power spectral density of one signal, as it streams.
+
+use super::fft::{Complex, Fft};
+use super::{Interval, hann_periodic};
+
+/// Most segments averaged: enough for a smooth estimate, and a bound on the work.
+const MAX_SEGMENTS: usize = 4096;
+
+/// Welch's estimate, as scipy's `welch(x, fs, window='hann', nperseg, noverlap=nperseg/2,
+/// detrend='constant', scaling='density')` computes it, over the contiguous runs of a
+/// signal (a gap of more than 3 sampling intervals ends a run), each run's segments
+/// averaged together: `nperseg` the power of two nearest `fs / 2 Hz` (2 Hz resolution),
+/// within 256 and 8192 samples; the sampling rate the median of the first intervals.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Welch {
+    interval: Interval,
+    last: Option<u64>,
+    state: Option<State>,
+    /// Samples before the rate is known.
+    early: Vec<(u64, f64)>,
+}
+
+#[derive(Debug, Clone)]
+struct State {
+    dt_us: u64,
+    fft: Fft,
+    window: Vec<f64>,
+    /// The current run's samples not yet past a segment start.
+    run: Vec<f64>,
+    sum: Vec<f64>,
+    segments: usize,
+    scratch: Vec<Complex>,
+}
+
+/// A power spectral density: frequencies and densities (units² per Hz).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Spectrum {
+    pub(crate) sample_rate_hz: f64,
+    pub(crate) segments: usize,
+    pub(crate) freq_hz: Vec<f64>,
+    pub(crate) density: Vec<f64>,
+}
+
+impl Welch {
+    /// Takes one sample; `keep` false ends the current run (the vehicle not in flight).
+    pub(crate) fn push(&mut self, t: u64, x: f64, keep: bool) {
+        let median = self.interval.see(t);
+        if self.state.is_none() {
+            match median {
+                None => {
+                    if keep && x.is_finite() {
+                        self.early.push((t, x));
+                    }
+                    return;
+                }
+                Some(dt) => {
+                    self.state = Some(State::new(dt));
+                    for (t, x) in std::mem::take(&mut self.early) {
+                        self.take(t, x, true);
+                    }
+                }
+            }
+        }
+        self.take(t, x, keep);
+    }
+
+    fn take(&mut self, t: u64, x: f64, keep: bool) {
+        let state = self.state.as_mut().expect("made");
+        let gap = self.last.is_some_and(|l| t <= l || t - l > 3 * state.dt_us);
+        if !keep || !x.is_finite() || gap {
+            state.run.clear();
+        }
+        self.last = Some(t);
+        if keep && x.is_finite() {
+            state.push(x);
+        }
+    }
+
+    /// The estimate, if at least one segment was seen.
+    pub(crate) fn finish(self) -> Option<Spectrum> {
+        let s = self.state?;
+        if s.segments == 0 {
+            return None;
+        }
+        let n = s.fft.len();
+        let fs = 1e6 / s.dt_us as f64;
+        Some(Spectrum {
+            sample_rate_hz: fs,
+            segments: s.segments,
+            freq_hz: (0..=n / 2).map(|k| k as f64 * fs / n as f64).collect(),
+            density: s.sum.iter().map(|p| p / s.segments as f64).collect(),
+        })
+    }
+}
+
+impl State {
+    fn new(dt_us: u64) -> State {
+        let fs = 1e6 / dt_us as f64;
+        let n = 2f64
+            .powf((fs / 2.0).max(1.0).log2().round())
+            .clamp(256.0, 8192.0) as usize;
+        State {
+            dt_us,
+            fft: Fft::new(n),
+            window: hann_periodic(n),
+            run: Vec::with_capacity(2 * n),
+            sum: vec![0.0; n / 2 + 1],
+            segments: 0,
+            scratch: vec![Complex::default(); n],
+        }
+    }
+
+    fn push(&mut self, x: f64) {
+        self.run.push(x);
+        let n = self.fft.len();
+        if self.run.len() < n {
+            return;
+        }
+        if self.segments < MAX_SEGMENTS {
+            self.segment();
+        }
+        self.run.drain(..n / 2);
+    }
+
+    fn segment(&mut self) {
+        let n = self.fft.len();
+        let seg = &self.run[..n];
+        let mean = seg.iter().sum::<f64>() / n as f64;
+        for (k, c) in self.scratch.iter_mut().enumerate() {
+            *c = Complex::new((seg[k] - mean) * self.window[k], 0.0);
+        }
+        self.fft.forward(&mut self.scratch);
+        let fs = 1e6 / self.dt_us as f64;
+        let scale = 1.0 / (fs * self.window.iter().map(|w| w * w).sum::<f64>());
+        for (k, p) in self.sum.iter_mut().enumerate() {
+            let one_sided = if k == 0 || k == n / 2 { 1.0 } else { 2.0 };
+            *p += self.scratch[k].norm_sqr() * scale * one_sided;
+        }
+        self.segments += 1;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_sine_shows_at_its_frequency_with_its_power() {
+        // 1 kHz sampling, a 50 Hz sine of amplitude 2 (power 2) and a little noise.
+        let mut w = Welch::default();
+        let mut noise = 0x9e37_79b9u32;
+        for i in 0..20_000u64 {
+            noise ^= noise << 13;
+            noise ^= noise >> 17;
+            noise ^= noise << 5;
+            let t = i as f64 / 1000.0;
+            let x = 2.0 * (2.0 * std::f64::consts::PI * 50.0 * t).sin()
+                + (f64::from(noise) / f64::from(u32::MAX) - 0.5) * 0.01;
+            w.push(i * 1000, x, true);
+        }
+        let s = w.finish().unwrap();
+        assert_eq!(s.sample_rate_hz, 1000.0);
+        assert_eq!(s.freq_hz.len(), 257, "512-point segments: 2 Hz resolution");
+        let peak = (0..s.density.len())
+            .max_by(|&a, &b| s.density[a].total_cmp(&s.density[b]))
+            .unwrap();
+        assert!((s.freq_hz[peak] - 50.0).abs() < 2.0, "{}", s.freq_hz[peak]);
+        // The integral of the density is the signal's power (A²/2 = 2).
+        let df = s.freq_hz[1];
+        let power: f64 = s.density.iter().sum::<f64>() * df;
+        assert!((power - 2.0).abs() < 0.05, "{power}");
+        // A gap ends a run; samples out of flight are left out.
+        let mut w = Welch::default();
+        for i in 0..1000u64 {
+            w.push(i * 1000, 1.0, i % 300 < 290);
+        }
+        assert!(w.finish().is_none(), "no run is a whole segment long");
+    }
+}

@@ -1,0 +1,446 @@
+//! The step response of a rate controller, from its setpoint and the measured rate, by
+//! Wiener deconvolution, as Flight Review's PID analysis (after Plasmatree's PID-Analyzer)
+//! computes it, as the samples stream.
+
+use super::fft::{Complex, Fft};
+use super::{Interval, hann_symmetric};
+
+/// The analysis rate: the gyro's, at most this (a 0.5 s response needs no more).
+const MAX_RATE_HZ: f64 = 500.0;
+/// Window length and response length, s.
+const FRAME_S: f64 = 1.0;
+const RESPONSE_S: f64 = 0.5;
+/// Windows start every `frame / SUPERPOSITION` samples.
+const SUPERPOSITION: usize = 16;
+/// The deconvolution's cut-off, Hz.
+const CUTOFF_HZ: f64 = 25.0;
+/// A window's setpoint must reach this (deg/s) to count; above `HIGH` it counts apart.
+const LOW: f64 = 20.0;
+const HIGH: f64 = 500.0;
+/// Fewest windows for a response.
+const MIN_WINDOWS: usize = 10;
+/// The averaging histogram's amplitudes.
+const AMPLITUDES: usize = 1000;
+const AMPLITUDE_MIN: f64 = -1.5;
+const AMPLITUDE_MAX: f64 = 3.5;
+
+/// One axis: setpoint and measured rate (deg/s) resampled to one grid, windowed,
+/// deconvolved, the windows' steps accumulated.
+///
+/// What is computed, as Flight Review does: 1 s windows every 1/16 s, a symmetric Hann
+/// taper, zero-padded to 1024 points; per window the impulse response
+/// `h = Re IFFT(Y·conj(U) / (|U|² + 1/SNR))`, `SNR = 10` below 25 Hz rolling off through a
+/// Gaussian-smoothed mask; its first 0.5 s summed into the step; windows whose tapered
+/// setpoint peaks above 20 deg/s count (at least 10 are needed), those above 500 deg/s
+/// apart; the response the mode-seeking average of their steps (a histogram of 1000
+/// amplitudes over [-1.5, 3.5], smoothed by σ = 7 bins, each time normalized, weights H²).
+/// Differences, for streaming: the grid is the gyro's median rate (at most 500 Hz), with
+/// the setpoint held from its last sample, and windows lie within in-flight runs.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct StepResponse {
+    interval: Interval,
+    state: Option<State>,
+    setpoint: Option<f64>,
+    /// The last gyro sample, for interpolation.
+    last: Option<(u64, f64)>,
+}
+
+#[derive(Debug, Clone)]
+struct State {
+    dt_us: u64,
+    next_t: u64,
+    flen: usize,
+    rlen: usize,
+    shift: usize,
+    since: usize,
+    u: std::collections::VecDeque<f64>,
+    y: std::collections::VecDeque<f64>,
+    window: Vec<f64>,
+    fft: Fft,
+    inv_snr: Vec<f64>,
+    low: Histogram,
+    high: Histogram,
+    scratch_u: Vec<Complex>,
+    scratch_y: Vec<Complex>,
+}
+
+#[derive(Debug, Clone)]
+struct Histogram {
+    /// `rlen × AMPLITUDES`, time-major.
+    counts: Vec<f32>,
+    windows: usize,
+}
+
+/// An axis's response: time (s) and the averaged step, for windows up to 500 deg/s and,
+/// if enough, above.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Response {
+    pub(crate) sample_rate_hz: f64,
+    pub(crate) time_s: Vec<f64>,
+    pub(crate) low: Option<(usize, Vec<f64>)>,
+    pub(crate) high: Option<(usize, Vec<f64>)>,
+}
+
+impl StepResponse {
+    /// A rate setpoint sample (deg/s).
+    pub(crate) fn setpoint(&mut self, value: f64) {
+        if value.is_finite() {
+            self.setpoint = Some(value);
+        }
+    }
+
+    /// A measured rate sample (deg/s) at `t` µs; `keep` false ends the current run.
+    pub(crate) fn gyro(&mut self, t: u64, value: f64, keep: bool) {
+        let Some(dt) = self.interval.see(t) else {
+            self.last = Some((t, value));
+            return;
+        };
+        let state = self.state.get_or_insert_with(|| State::new(dt, t));
+        let (Some((t0, v0)), Some(sp)) = (self.last, self.setpoint) else {
+            self.last = Some((t, value));
+            return;
+        };
+        self.last = Some((t, value));
+        if !keep || !value.is_finite() || t <= t0 || t - t0 > 3 * dt.max(state.dt_us) {
+            state.reset(t);
+            return;
+        }
+        // Grid points between the last sample and this one, interpolated.
+        while state.next_t <= t {
+            if state.next_t >= t0 {
+                let f = (state.next_t - t0) as f64 / (t - t0) as f64;
+                state.push(sp, v0 + f * (value - v0));
+            }
+            state.next_t += state.dt_us;
+        }
+    }
+
+    /// The response, if enough windows counted.
+    pub(crate) fn finish(self) -> Option<Response> {
+        let s = self.state?;
+        let dt = s.dt_us as f64 / 1e6;
+        let low = s.low.average();
+        let high = s.high.average();
+        (low.is_some() || high.is_some()).then(|| Response {
+            sample_rate_hz: 1.0 / dt,
+            time_s: (0..s.rlen).map(|k| k as f64 * dt).collect(),
+            low,
+            high,
+        })
+    }
+}
+
+impl State {
+    fn new(gyro_dt_us: u64, t: u64) -> State {
+        let min_dt = (1e6 / MAX_RATE_HZ) as u64;
+        let dt_us = gyro_dt_us.max(min_dt);
+        let fs = 1e6 / dt_us as f64;
+        let flen = (FRAME_S * fs) as usize;
+        let rlen = (RESPONSE_S * fs) as usize;
+        // Zero-padded to the next multiple of 1024 (at most 500 Hz: 1024).
+        let len = 1024;
+        let dt = 1.0 / fs;
+        State {
+            dt_us,
+            next_t: t,
+            flen,
+            rlen,
+            shift: (flen / SUPERPOSITION).max(1),
+            since: 0,
+            u: std::collections::VecDeque::with_capacity(flen + 1),
+            y: std::collections::VecDeque::with_capacity(flen + 1),
+            window: hann_symmetric(flen),
+            fft: Fft::new(len),
+            inv_snr: inverse_snr(len, dt),
+            low: Histogram::new(rlen),
+            high: Histogram::new(rlen),
+            scratch_u: vec![Complex::default(); len],
+            scratch_y: vec![Complex::default(); len],
+        }
+    }
+
+    fn reset(&mut self, t: u64) {
+        self.u.clear();
+        self.y.clear();
+        self.since = 0;
+        self.next_t = t;
+    }
+
+    fn push(&mut self, u: f64, y: f64) {
+        self.u.push_back(u);
+        self.y.push_back(y);
+        if self.u.len() > self.flen {
+            self.u.pop_front();
+            self.y.pop_front();
+        }
+        self.since += 1;
+        if self.u.len() == self.flen && self.since >= self.shift {
+            self.since = 0;
+            self.window_step();
+        }
+    }
+
+    fn window_step(&mut self) {
+        let peak = self
+            .u
+            .iter()
+            .zip(&self.window)
+            .map(|(u, w)| (u * w).abs())
+            .fold(0.0, f64::max);
+        if peak <= LOW {
+            return;
+        }
+        let len = self.fft.len();
+        for k in 0..len {
+            let (u, y) = if k < self.flen {
+                (self.u[k] * self.window[k], self.y[k] * self.window[k])
+            } else {
+                (0.0, 0.0)
+            };
+            self.scratch_u[k] = Complex::new(u, 0.0);
+            self.scratch_y[k] = Complex::new(y, 0.0);
+        }
+        self.fft.forward(&mut self.scratch_u);
+        self.fft.forward(&mut self.scratch_y);
+        for k in 0..len {
+            let (u, y) = (self.scratch_u[k], self.scratch_y[k]);
+            self.scratch_y[k] = y
+                .mul(u.conj())
+                .scale(1.0 / (u.norm_sqr() + self.inv_snr[k]));
+        }
+        self.fft.inverse(&mut self.scratch_y);
+        let mut step = 0.0;
+        let hist = if peak <= HIGH {
+            &mut self.low
+        } else {
+            &mut self.high
+        };
+        for n in 0..self.rlen {
+            step += self.scratch_y[n].re;
+            hist.add(n, step);
+        }
+        hist.windows += 1;
+    }
+}
+
+impl Histogram {
+    fn new(rlen: usize) -> Histogram {
+        Histogram {
+            counts: vec![0.0; rlen * AMPLITUDES],
+            windows: 0,
+        }
+    }
+
+    fn add(&mut self, n: usize, value: f64) {
+        let x = (value - AMPLITUDE_MIN) / (AMPLITUDE_MAX - AMPLITUDE_MIN) * AMPLITUDES as f64;
+        if (0.0..=AMPLITUDES as f64).contains(&x) {
+            let bin = (x as usize).min(AMPLITUDES - 1);
+            self.counts[n * AMPLITUDES + bin] += 1.0;
+        }
+    }
+
+    /// The mode-seeking average over time, if enough windows counted.
+    fn average(&self) -> Option<(usize, Vec<f64>)> {
+        if self.windows < MIN_WINDOWS {
+            return None;
+        }
+        let kernel = gaussian_kernel(7.0);
+        let ys: Vec<f64> = (0..AMPLITUDES)
+            .map(|j| {
+                AMPLITUDE_MIN + (AMPLITUDE_MAX - AMPLITUDE_MIN) * j as f64 / (AMPLITUDES - 1) as f64
+            })
+            .collect();
+        let rlen = self.counts.len() / AMPLITUDES;
+        let avr = (0..rlen)
+            .map(|n| {
+                let column: Vec<f64> = self.counts[n * AMPLITUDES..(n + 1) * AMPLITUDES]
+                    .iter()
+                    .map(|&c| f64::from(c))
+                    .collect();
+                let smooth = convolve_constant(&column, &kernel);
+                let max = smooth.iter().copied().fold(0.0, f64::max);
+                if max <= 0.0 {
+                    return 0.0;
+                }
+                let (mut num, mut den) = (0.0, 0.0);
+                for (h, y) in smooth.iter().zip(&ys) {
+                    let w = (h / max).powi(2);
+                    num += y * w;
+                    den += w;
+                }
+                num / den
+            })
+            .collect();
+        Some((self.windows, avr))
+    }
+}
+
+/// `1 / SNR` per FFT bin: `SNR = 10` below the cut-off, rolling off through a mask
+/// smoothed by a Gaussian of a sixth of the pass band's bins (scipy's
+/// `gaussian_filter1d`, mode `reflect`), as Flight Review builds it.
+fn inverse_snr(len: usize, dt: f64) -> Vec<f64> {
+    let freq: Vec<f64> = (0..len)
+        .map(|k| {
+            let k = if k < len.div_ceil(2) {
+                k as f64
+            } else {
+                k as f64 - len as f64
+            };
+            (k / (len as f64 * dt)).abs()
+        })
+        .collect();
+    let mask: Vec<f64> = to_mask(
+        &freq
+            .iter()
+            .map(|f| f.clamp(CUTOFF_HZ - 1e-9, CUTOFF_HZ))
+            .collect::<Vec<_>>(),
+    );
+    let pass: f64 = mask.iter().map(|m| 1.0 - m).sum();
+    let smooth = to_mask(&convolve_reflect(&mask, &gaussian_kernel(pass / 6.0)));
+    smooth
+        .iter()
+        .map(|m| 1.0 / (10.0 * (1.0 - m + 1e-9)))
+        .collect()
+}
+
+/// `(x - min) / max(x - min)`, left as `x - min` when that maximum is below 1e-10.
+fn to_mask(x: &[f64]) -> Vec<f64> {
+    let min = x.iter().copied().fold(f64::INFINITY, f64::min);
+    let shifted: Vec<f64> = x.iter().map(|v| v - min).collect();
+    let max = shifted.iter().copied().fold(0.0, f64::max);
+    if max > 1e-10 {
+        shifted.iter().map(|v| v / max).collect()
+    } else {
+        shifted
+    }
+}
+
+/// A normalized Gaussian kernel of `sigma`, radius `⌊4σ + 0.5⌋` (scipy's default).
+fn gaussian_kernel(sigma: f64) -> Vec<f64> {
+    let radius = (4.0 * sigma + 0.5) as i64;
+    let k: Vec<f64> = (-radius..=radius)
+        .map(|i| (-0.5 * (i as f64 / sigma).powi(2)).exp())
+        .collect();
+    let sum: f64 = k.iter().sum();
+    k.iter().map(|v| v / sum).collect()
+}
+
+fn convolve(x: &[f64], kernel: &[f64], at: impl Fn(i64) -> f64) -> Vec<f64> {
+    let r = (kernel.len() / 2) as i64;
+    (0..x.len() as i64)
+        .map(|i| {
+            kernel
+                .iter()
+                .enumerate()
+                .map(|(k, w)| w * at(i + k as i64 - r))
+                .sum()
+        })
+        .collect()
+}
+
+/// Convolution with the edges mirrored (`d c b a | a b c d | d c b a`).
+fn convolve_reflect(x: &[f64], kernel: &[f64]) -> Vec<f64> {
+    let n = x.len() as i64;
+    convolve(x, kernel, |i| {
+        let period = 2 * n;
+        let m = i.rem_euclid(period);
+        x[(if m < n { m } else { period - 1 - m }) as usize]
+    })
+}
+
+/// Convolution with zeros beyond the edges.
+fn convolve_constant(x: &[f64], kernel: &[f64]) -> Vec<f64> {
+    convolve(x, kernel, |i| {
+        usize::try_from(i)
+            .ok()
+            .and_then(|i| x.get(i).copied())
+            .unwrap_or(0.0)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A first-order loop with a time constant and a delay, under square-wave steps.
+    fn loop_response(tau_s: f64, delay_s: f64) -> Response {
+        let mut s = StepResponse::default();
+        let fs = 250.0;
+        let mut y = 0.0;
+        let mut history = std::collections::VecDeque::new();
+        let delay = (delay_s * fs) as usize;
+        for i in 0..(60.0 * fs) as u64 {
+            let t = i as f64 / fs;
+            // Steps of ±300 deg/s every 0.2 s.
+            let sp = if ((t / 0.2) as u64).is_multiple_of(2) {
+                300.0
+            } else {
+                -300.0
+            };
+            history.push_back(sp);
+            let delayed = if history.len() > delay {
+                history.pop_front().unwrap()
+            } else {
+                0.0
+            };
+            y += (delayed - y) / (tau_s * fs);
+            s.setpoint(sp);
+            s.gyro((t * 1e6) as u64, y, true);
+        }
+        s.finish().unwrap()
+    }
+
+    #[test]
+    fn a_first_order_loop_steps_as_its_model() {
+        let r = loop_response(0.03, 0.01);
+        assert_eq!(r.sample_rate_hz, 250.0);
+        assert_eq!(r.time_s.len(), 125, "0.5 s");
+        let (windows, step) = r.low.unwrap();
+        assert!(windows > 100, "{windows}");
+        let at = |s: f64| step[(s * 250.0) as usize];
+        // The model: 0 until the delay, 1 - e^{-(t - delay)/tau} after.
+        let model = |s: f64| {
+            if s < 0.01 {
+                0.0
+            } else {
+                1.0 - (-(s - 0.01) / 0.03f64).exp()
+            }
+        };
+        for s in [0.1, 0.2, 0.4] {
+            assert!(
+                (at(s) - model(s)).abs() < 0.1,
+                "{s}: {} vs {}",
+                at(s),
+                model(s)
+            );
+        }
+        assert!(at(0.004) < 0.3, "before the loop answers: {}", at(0.004));
+        assert!(r.high.is_none(), "no window above 500 deg/s");
+        // A slower loop rises later.
+        let slow = loop_response(0.1, 0.01).low.unwrap().1;
+        assert!(slow[(0.05 * 250.0) as usize] < at(0.05) - 0.2);
+    }
+
+    #[test]
+    fn too_little_input_gives_no_response() {
+        let mut s = StepResponse::default();
+        for i in 0..10_000u64 {
+            s.setpoint(5.0);
+            s.gyro(i * 4000, 5.0, true);
+        }
+        assert!(s.finish().is_none(), "setpoint below 20 deg/s");
+    }
+
+    #[test]
+    fn the_snr_mask_passes_below_the_cutoff() {
+        let inv = inverse_snr(1024, 1.0 / 250.0);
+        assert!(
+            (inv[1] - 0.1).abs() < 1e-6,
+            "SNR 10 in the pass band: {}",
+            inv[1]
+        );
+        let bin_40_hz = (40.0 * 1024.0 / 250.0) as usize;
+        assert!(inv[bin_40_hz] > 1e3, "suppressed above: {}", inv[bin_40_hz]);
+        assert_eq!(inv[5], inv[1024 - 5], "symmetric");
+    }
+}

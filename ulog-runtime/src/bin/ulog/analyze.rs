@@ -1,0 +1,38 @@
+//! `ulog analyze`: the flight analysis of logs, as text or JSON, over `analysis::Analysis`.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use ulog_runtime::analysis::Analysis;
+
+use crate::Failure;
+
+/// `ulog analyze FILE... [--json]`.
+#[derive(clap::Args)]
+pub(crate) struct Args {
+    /// The logs.
+    #[arg(required = true)]
+    files: Vec<PathBuf>,
+    /// One JSON object per log (a line each), with flight-review-rs's keys where it has the
+    /// same fact.
+    #[arg(long)]
+    json: bool,
+}
+
+pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
+    for (i, path) in args.files.iter().enumerate() {
+        let log = crate::open(path)?;
+        let analysis = Analysis::of_log(&log);
+        if args.json {
+            serde_json::to_writer(&mut *out, &analysis)?;
+            writeln!(out)?;
+        } else {
+            if i > 0 {
+                writeln!(out)?;
+            }
+            writeln!(out, "{}", path.display())?;
+            write!(out, "{analysis}")?;
+        }
+    }
+    Ok(())
+}
