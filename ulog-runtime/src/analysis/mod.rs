@@ -343,9 +343,10 @@ pub struct Missing {
     pub reason: String,
 }
 
-/// The analysis's consumers, fed the rows of one pass in file order: made once the log's
-/// definitions are read ([`Analyzer::new`]), given every event or row ([`Analyzer::event`],
-/// [`Analyzer::row`]), then [`Analyzer::finish`]ed.
+/// The analysis's consumers, fed the rows of one pass in file order: made empty
+/// ([`Analyzer::new`]), given every event or row with the metadata read so far
+/// ([`Analyzer::event`], [`Analyzer::row`]; the first row's metadata gives the initial
+/// parameters), then [`Analyzer::finish`]ed.
 #[derive(Default)]
 pub struct Analyzer {
     state: state::FlightState,
@@ -359,6 +360,8 @@ pub struct Analyzer {
     routes: Vec<Option<Route>>,
     /// Bytes the reader skipped as damaged.
     damaged_bytes: u64,
+    /// Whether the initial parameters were read (at the first row).
+    started: bool,
     /// The last row's time.
     last_timestamp: u64,
 }
@@ -380,19 +383,17 @@ struct Route {
 }
 
 impl Analyzer {
-    /// An analyzer for a log with these definitions (its parameters give battery cell
-    /// counts), nothing seen.
-    pub fn new(meta: &Metadata) -> Analyzer {
-        let mut a = Analyzer::default();
-        a.diagnostics.start(meta);
-        a
+    /// An analyzer that has seen nothing.
+    #[must_use]
+    pub fn new() -> Analyzer {
+        Analyzer::default()
     }
 
     /// Takes one event of a pass over a log, in file order.
     #[inline]
-    pub fn event(&mut self, event: &Event<'_>) {
+    pub fn event(&mut self, meta: &Metadata, event: &Event<'_>) {
         match event {
-            Event::Row(row) => self.row(row),
+            Event::Row(row) => self.row(meta, row),
             Event::Diagnostic(d) => {
                 if let Some(r) = d.damaged_range() {
                     self.damaged_bytes += r.end - r.start;
@@ -404,7 +405,11 @@ impl Analyzer {
 
     /// Takes one row, in file order.
     #[inline]
-    pub fn row(&mut self, row: &Row<'_>) {
+    pub fn row(&mut self, meta: &Metadata, row: &Row<'_>) {
+        if !self.started {
+            self.started = true;
+            self.diagnostics.start(meta);
+        }
         let i = row.subscription.index();
         if self.routes.len() <= i {
             self.routes.resize_with(i + 1, || None);
@@ -514,29 +519,27 @@ impl Analysis {
     /// not by the log).
     pub fn of_reader(input: impl Read) -> Result<Analysis, ReadError> {
         let mut reader = StreamReader::new(input)?;
-        let mut analyzer: Option<Analyzer> = None;
+        let mut analyzer = Analyzer::new();
         reader.for_each_message(|meta, event, _| {
-            analyzer
-                .get_or_insert_with(|| Analyzer::new(meta))
-                .event(&event);
+            analyzer.event(meta, &event);
             Ok::<(), ReadError>(())
         })?;
-        let meta = reader.metadata();
-        Ok(analyzer.unwrap_or_else(|| Analyzer::new(meta)).finish(meta))
+        Ok(analyzer.finish(reader.metadata()))
     }
 
     /// The analysis of a whole-file log.
     pub fn of_log(log: &Log<'_>) -> Analysis {
-        let mut analyzer = Analyzer::new(log.metadata());
+        let meta = log.metadata();
+        let mut analyzer = Analyzer::new();
         for row in log.data() {
-            analyzer.row(&row);
+            analyzer.row(meta, &row);
         }
         for d in log.diagnostics() {
             if let Some(r) = d.damaged_range() {
                 analyzer.damaged_bytes += r.end - r.start;
             }
         }
-        analyzer.finish(log.metadata())
+        analyzer.finish(meta)
     }
 }
 

@@ -105,7 +105,7 @@ impl Acc {
             let s = h.hypot(v[2]);
             max(&mut self.max_speed, s);
             max(&mut self.max_h, h);
-            max(&mut self.max_up, (-v[2]).max(0.0));
+            max(&mut self.max_up, if v[2] < 0.0 { -v[2] } else { 0.0 });
             max(&mut self.max_down, v[2].max(0.0));
             self.speed_sum += s;
             self.speed_n += 1;

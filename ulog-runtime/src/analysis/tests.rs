@@ -1,1 +1,551 @@
+//! The analysis on flights written with the writer: a normal one (which must report
+//! nothing wrong, though its outputs drop to idle before the disarm is logged), and the
+//! same with each fault injected.
 
+use super::*;
+use crate::read::ParamValue;
+use crate::{Log, ULog, Writer, WriterOptions};
+
+#[derive(ULog)]
+struct VehicleStatus {
+    timestamp: u64,
+    nav_state: u8,
+    arming_state: u8,
+    vehicle_type: u8,
+    is_vtol: bool,
+    in_transition_mode: bool,
+}
+
+#[derive(ULog)]
+struct VehicleLandDetected {
+    timestamp: u64,
+    landed: bool,
+}
+
+#[derive(ULog)]
+struct VehicleLocalPosition {
+    timestamp: u64,
+    x: f32,
+    y: f32,
+    z: f32,
+    vx: f32,
+    vy: f32,
+    vz: f32,
+}
+
+#[derive(ULog)]
+struct VehicleAttitude {
+    timestamp: u64,
+    q: [f32; 4],
+}
+
+#[derive(ULog)]
+struct VehicleAngularVelocity {
+    timestamp: u64,
+    xyz: [f32; 3],
+}
+
+#[derive(ULog)]
+struct VehicleRatesSetpoint {
+    timestamp: u64,
+    roll: f32,
+    pitch: f32,
+    yaw: f32,
+}
+
+#[derive(ULog)]
+struct BatteryStatus {
+    timestamp: u64,
+    voltage_v: f32,
+    current_a: f32,
+    discharged_mah: f32,
+}
+
+#[derive(ULog)]
+struct VehicleGpsPosition {
+    timestamp: u64,
+    lat: i32,
+    lon: i32,
+    alt: i32,
+    eph: f32,
+    epv: f32,
+    fix_type: u8,
+    satellites_used: u8,
+    jamming_state: u8,
+}
+
+#[derive(ULog)]
+struct VehicleImuStatus {
+    timestamp: u64,
+    accel_vibration_metric: f32,
+}
+
+#[derive(ULog)]
+struct EstimatorStatus {
+    timestamp: u64,
+    vel_test_ratio: f32,
+    pos_test_ratio: f32,
+    hgt_test_ratio: f32,
+}
+
+#[derive(ULog)]
+struct ActuatorOutputs {
+    timestamp: u64,
+    noutputs: u32,
+    output: [f32; 8],
+}
+
+#[derive(ULog)]
+struct InputRc {
+    timestamp: u64,
+    rc_lost: bool,
+}
+
+/// Faults to inject into the flight.
+#[derive(Default, Clone, Copy)]
+struct Faults {
+    brownout: bool,
+    ekf: bool,
+    gps: bool,
+    motor: bool,
+    rc: bool,
+    steps: bool,
+}
+
+const S: u64 = 1_000_000;
+
+/// 60 s: disarmed on the ground to 5 s, armed on the ground to 10 s, flying a circle of
+/// 10 m radius at 2 m/s and 5 m up to 50 s, landed, disarmed at 55 s (the outputs drop to
+/// their disarmed value 50 ms before the disarm is logged, as PX4 logs it). Position mode
+/// to 30 s, Mission after. A 4S battery from 16.4 V down to 15.2 V at 10 A while flying.
+fn flight(faults: Faults) -> Vec<u8> {
+    let mut w = Writer::new(
+        Vec::new(),
+        WriterOptions {
+            start_timestamp: 0,
+            default_parameters: true,
+        },
+    )
+    .unwrap();
+    w.parameter("BAT1_N_CELLS", ParamValue::Int32(4)).unwrap();
+    w.parameter("MC_ROLL_P", ParamValue::Float(7.0)).unwrap();
+    w.parameter("MC_PITCH_P", ParamValue::Float(6.5)).unwrap();
+    w.default_parameter("MC_ROLL_P", ParamValue::Float(6.5), 1)
+        .unwrap();
+    w.default_parameter("MC_PITCH_P", ParamValue::Float(6.5), 1)
+        .unwrap();
+    let status = w.topic::<VehicleStatus>(0).unwrap();
+    let land = w.topic::<VehicleLandDetected>(0).unwrap();
+    let local = w.topic::<VehicleLocalPosition>(0).unwrap();
+    let attitude = w.topic::<VehicleAttitude>(0).unwrap();
+    let rates = w.topic::<VehicleAngularVelocity>(0).unwrap();
+    let setpoint = w.topic::<VehicleRatesSetpoint>(0).unwrap();
+    let battery = w.topic::<BatteryStatus>(0).unwrap();
+    let gps = w.topic::<VehicleGpsPosition>(0).unwrap();
+    let imu = w.topic::<VehicleImuStatus>(0).unwrap();
+    let estimator = w.topic::<EstimatorStatus>(0).unwrap();
+    let outputs = w.topic::<ActuatorOutputs>(0).unwrap();
+    let rc = w.topic::<InputRc>(0).unwrap();
+    let in_air = |t: u64| (10 * S..50 * S).contains(&t);
+    let armed = |t: u64| (5 * S..55 * S).contains(&t);
+    let within = |t: u64, a: u64, b: u64| (a * S..b * S).contains(&t);
+    // The measured roll rate: a first-order lag of 20 ms behind the setpoint.
+    let mut roll = 0.0f64;
+    // 200 Hz; each topic at its rate.
+    for i in 0..60 * 200u64 {
+        let t = i * 5_000 + 1;
+        let ts = t as f64 / 1e6;
+        let every = |hz: u64| i % (200 / hz) == 0;
+        if every(10) {
+            w.write(
+                &status,
+                &VehicleStatus {
+                    timestamp: t,
+                    nav_state: if ts < 30.0 { 2 } else { 3 },
+                    arming_state: if armed(t) { 2 } else { 1 },
+                    vehicle_type: 1,
+                    is_vtol: false,
+                    in_transition_mode: false,
+                },
+            )
+            .unwrap();
+            w.write(
+                &land,
+                &VehicleLandDetected {
+                    timestamp: t,
+                    landed: !in_air(t),
+                },
+            )
+            .unwrap();
+            let flying = in_air(t);
+            let mut v = if flying {
+                16.4 - 1.2 * (ts - 10.0) / 40.0
+            } else {
+                16.4
+            };
+            if faults.brownout && within(t, 30, 35) {
+                v = 12.5;
+            }
+            w.write(
+                &battery,
+                &BatteryStatus {
+                    timestamp: t,
+                    voltage_v: v as f32,
+                    current_a: if flying { 10.0 } else { 0.5 },
+                    discharged_mah: (ts * 50.0) as f32,
+                },
+            )
+            .unwrap();
+            w.write(
+                &imu,
+                &VehicleImuStatus {
+                    timestamp: t,
+                    accel_vibration_metric: 2.0,
+                },
+            )
+            .unwrap();
+            let bad = faults.ekf && within(t, 20, 27);
+            w.write(
+                &estimator,
+                &EstimatorStatus {
+                    timestamp: t,
+                    vel_test_ratio: 0.2,
+                    pos_test_ratio: if bad { 1.5 } else { 0.3 },
+                    hgt_test_ratio: 0.1,
+                },
+            )
+            .unwrap();
+            w.write(
+                &rc,
+                &InputRc {
+                    timestamp: t,
+                    rc_lost: faults.rc && within(t, 35, 38),
+                },
+            )
+            .unwrap();
+        }
+        let phase = if in_air(t) { (ts - 10.0) * 0.2 } else { 0.0 };
+        if every(50) {
+            let (x, y) = (10.0 * phase.cos(), 10.0 * phase.sin());
+            let (vx, vy) = if in_air(t) {
+                (-2.0 * phase.sin(), 2.0 * phase.cos())
+            } else {
+                (0.0, 0.0)
+            };
+            w.write(
+                &local,
+                &VehicleLocalPosition {
+                    timestamp: t,
+                    x: x as f32,
+                    y: y as f32,
+                    z: if in_air(t) { -5.0 } else { 0.0 },
+                    vx: vx as f32,
+                    vy: vy as f32,
+                    vz: 0.0,
+                },
+            )
+            .unwrap();
+            // A tilt of 10 degrees about x in flight.
+            let half = if in_air(t) { 5f64.to_radians() } else { 0.0 };
+            w.write(
+                &attitude,
+                &VehicleAttitude {
+                    timestamp: t,
+                    q: [half.cos() as f32, half.sin() as f32, 0.0, 0.0],
+                },
+            )
+            .unwrap();
+            let motor = |k: usize| -> f32 {
+                if !armed(t) || t >= 55 * S - 50_000 {
+                    900.0
+                } else if !in_air(t) {
+                    1100.0
+                } else if faults.motor && k == 2 && within(t, 40, 42) {
+                    1100.0
+                } else {
+                    1500.0 + 10.0 * k as f32
+                }
+            };
+            let mut output = [900.0f32; 8];
+            for (k, o) in output.iter_mut().enumerate().take(4) {
+                *o = motor(k);
+            }
+            w.write(
+                &outputs,
+                &ActuatorOutputs {
+                    timestamp: t,
+                    noutputs: 8,
+                    output,
+                },
+            )
+            .unwrap();
+        }
+        if every(5) {
+            let jam = faults.gps && within(t, 25, 30);
+            w.write(
+                &gps,
+                &VehicleGpsPosition {
+                    timestamp: t,
+                    lat: 473_977_420 + (phase.sin() * 900.0) as i32,
+                    lon: 85_455_940 + (phase.cos() * 1300.0) as i32,
+                    alt: 488_000,
+                    eph: if jam { 12.0 } else { 1.0 },
+                    epv: 1.5,
+                    fix_type: 3,
+                    satellites_used: if jam { 4 } else { 12 },
+                    jamming_state: if jam { 3 } else { 1 },
+                },
+            )
+            .unwrap();
+        }
+        // Rates at 200 Hz: steps of ±100 deg/s on roll every 0.25 s, a 20 ms lag.
+        let step = if faults.steps && in_air(t) {
+            if ((ts * 4.0) as u64).is_multiple_of(2) {
+                100f64
+            } else {
+                -100.0
+            }
+        } else {
+            0.0
+        };
+        w.write(
+            &setpoint,
+            &VehicleRatesSetpoint {
+                timestamp: t,
+                roll: step.to_radians() as f32,
+                pitch: 0.0,
+                yaw: 0.0,
+            },
+        )
+        .unwrap();
+        roll += (step - roll) * (1.0 - (-0.005f64 / 0.02).exp());
+        w.write(
+            &rates,
+            &VehicleAngularVelocity {
+                timestamp: t,
+                xyz: [roll.to_radians() as f32, 0.0, 0.0],
+            },
+        )
+        .unwrap();
+    }
+    w.into_inner()
+}
+
+fn analysis(faults: Faults) -> Analysis {
+    let bytes = flight(faults);
+    let from_log = Analysis::of_log(&Log::from_slice(&bytes).unwrap());
+    let streamed = Analysis::of_reader(&bytes[..]).unwrap();
+    assert_eq!(
+        from_log, streamed,
+        "the whole-file and the streaming pass agree"
+    );
+    from_log
+}
+
+fn ids(a: &Analysis) -> Vec<&str> {
+    a.diagnostics.iter().map(|d| d.id.as_str()).collect()
+}
+
+#[test]
+fn a_normal_flight_reports_its_facts_and_nothing_wrong() {
+    let a = analysis(Faults::default());
+    assert_eq!(ids(&a), Vec::<&str>::new(), "{:#?}", a.diagnostics);
+    let modes: Vec<(&str, u64, u64)> = a
+        .flight_modes
+        .iter()
+        .map(|m| (m.mode.as_str(), m.start_us, m.end_us))
+        .collect();
+    assert_eq!(
+        modes,
+        [
+            ("Position", 1, 30 * S + 1),
+            ("Mission", 30 * S + 1, 60 * S - 5_000 + 1)
+        ]
+    );
+    assert_eq!(
+        a.armed,
+        [Interval {
+            start_us: 5 * S + 1,
+            end_us: 55 * S + 1
+        }]
+    );
+    assert_eq!(
+        a.flights,
+        [Interval {
+            start_us: 10 * S + 1,
+            end_us: 50 * S + 1
+        }]
+    );
+    let s = &a.stats.all;
+    // 40 s at 2 m/s on a circle (chords of 50 Hz samples), the 5 m jump up at take-off,
+    // and the jump from the circle's last point (phase 8 rad, 5 m up) back to the start.
+    let path = s.total_distance_m.unwrap();
+    let landing = ((10.0 - 10.0 * 8f64.cos()).powi(2) + (10.0 * 8f64.sin()).powi(2) + 25.0).sqrt();
+    assert!((path - (80.0 + 5.0 + landing)).abs() < 0.2, "{path}");
+    assert_eq!(s.max_altitude_diff_m, Some(5.0));
+    assert!((s.max_speed_m_s.unwrap() - 2.0).abs() < 1e-3);
+    assert!((s.max_tilt_deg.unwrap() - 10.0).abs() < 1e-3);
+    assert_eq!(s.max_speed_up_m_s, Some(0.0));
+    assert_eq!(
+        a.stats.armed.total_distance_m, s.total_distance_m,
+        "all of it armed"
+    );
+    let b = &a.battery;
+    assert!((b.min_voltage_v.unwrap() - 15.2).abs() < 0.05);
+    assert_eq!(b.max_current_a, Some(10.0));
+    assert_eq!(b.instances[0].cells, Some(4), "from BAT1_N_CELLS");
+    // The last battery row, at 59.9 s, says 50 mAh a second.
+    assert!((b.discharged_mah.unwrap() - 2995.0).abs() < 0.01);
+    let g = &a.gps_quality;
+    assert_eq!((g.min_satellites, g.max_satellites), (Some(12), Some(12)));
+    assert_eq!(g.fix_types_seen, [3]);
+    assert_eq!(g.jamming_states_seen, [1]);
+    assert_eq!(a.gps_track.len(), 60, "one point a second");
+    assert_eq!(a.gps_track[40].mode_id, Some(3), "Mission at 40 s");
+    assert!((a.gps_track[0].lat_deg - 47.397_742).abs() < 1e-6);
+    assert_eq!(a.vibration.status, "good");
+    assert_eq!(a.vibration.accel_vibe_mean, Some(2.0));
+    let non_default: Vec<(&str, f64, f64)> = a
+        .non_default_params
+        .iter()
+        .map(|p| (p.name.as_str(), p.value, p.default))
+        .collect();
+    assert_eq!(non_default, [("MC_ROLL_P", 7.0, 6.5)]);
+    let z = a
+        .field_stats
+        .iter()
+        .find(|f| f.topic == "vehicle_local_position" && f.field == "z")
+        .unwrap();
+    assert_eq!((z.min, z.max, z.count), (-5.0, 0.0, 3000));
+    assert!(!a.field_stats.iter().any(|f| f.field == "timestamp"));
+    assert!(a.missing.iter().any(|m| m.fact == "step_response"));
+    // The gyro's spectrum in flight.
+    let gyro_x = a
+        .spectra
+        .iter()
+        .find(|s| s.sensor == "gyro" && s.axis == "x")
+        .unwrap();
+    assert_eq!(gyro_x.sample_rate_hz, 200.0);
+}
+
+/// The one diagnostic a fault makes: its id, severity, start and end (µs, to 0.2 s).
+fn one(a: &Analysis) -> (&str, Severity, f64, f64) {
+    assert_eq!(a.diagnostics.len(), 1, "{:#?}", a.diagnostics);
+    let d = &a.diagnostics[0];
+    (
+        d.id.as_str(),
+        d.severity,
+        (d.timestamp_us as f64 / 1e6 * 5.0).round() / 5.0,
+        (d.end_timestamp_us.unwrap() as f64 / 1e6 * 5.0).round() / 5.0,
+    )
+}
+
+#[test]
+fn each_fault_is_found_with_its_time_and_severity() {
+    let brownout = analysis(Faults {
+        brownout: true,
+        ..Faults::default()
+    });
+    assert_eq!(
+        one(&brownout),
+        ("battery_brownout", Severity::Critical, 30.0, 35.0)
+    );
+    match &brownout.diagnostics[0].evidence {
+        Evidence::BatteryBrownout {
+            cells, cells_from, ..
+        } => assert_eq!((*cells, cells_from.as_str()), (4, "parameter")),
+        e => panic!("{e:?}"),
+    }
+    let ekf = analysis(Faults {
+        ekf: true,
+        ..Faults::default()
+    });
+    assert_eq!(one(&ekf), ("ekf_failure", Severity::Critical, 20.0, 27.0));
+    let gps = analysis(Faults {
+        gps: true,
+        ..Faults::default()
+    });
+    assert_eq!(
+        one(&gps),
+        ("gps_interference", Severity::Critical, 25.0, 30.0)
+    );
+    match &gps.diagnostics[0].evidence {
+        Evidence::GpsInterference { reasons, .. } => {
+            assert_eq!(reasons, &["eph spike", "satellites lost", "jamming"]);
+        }
+        e => panic!("{e:?}"),
+    }
+    let motor = analysis(Faults {
+        motor: true,
+        ..Faults::default()
+    });
+    assert_eq!(
+        one(&motor),
+        ("motor_failure", Severity::Critical, 40.0, 42.0)
+    );
+    match &motor.diagnostics[0].evidence {
+        Evidence::MotorFailure {
+            motor_index,
+            failure_mode,
+            flight_mode,
+            ..
+        } => assert_eq!(
+            (*motor_index, failure_mode.as_str(), flight_mode.as_str()),
+            (2, "drop_to_zero", "Mission")
+        ),
+        e => panic!("{e:?}"),
+    }
+    let rc = analysis(Faults {
+        rc: true,
+        ..Faults::default()
+    });
+    assert_eq!(one(&rc), ("rc_loss", Severity::Warning, 35.0, 38.0));
+}
+
+#[test]
+fn roll_steps_give_the_loops_step_response() {
+    let a = analysis(Faults {
+        steps: true,
+        ..Faults::default()
+    });
+    let roll = a.step_response.iter().find(|r| r.axis == "roll").unwrap();
+    assert_eq!(roll.sample_rate_hz, 200.0);
+    let step = roll.response.as_ref().unwrap();
+    // A first-order lag of 20 ms: 1 - e^{-t/0.02}.
+    for s in [0.02, 0.05, 0.1, 0.3] {
+        let want = 1.0 - (-s / 0.02f64).exp();
+        let got = step[(s * 200.0) as usize];
+        assert!((got - want).abs() < 0.12, "{s}: {got} vs {want}");
+    }
+    assert!(
+        a.step_response.iter().all(|r| r.axis == "roll"),
+        "the other axes did not move"
+    );
+}
+
+#[test]
+fn what_a_log_lacks_is_said() {
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    let sub = w.topic::<VehicleAttitude>(0).unwrap();
+    w.write(
+        &sub,
+        &VehicleAttitude {
+            timestamp: 1,
+            q: [1.0, 0.0, 0.0, 0.0],
+        },
+    )
+    .unwrap();
+    let a = Analysis::of_log(&Log::from_vec(w.into_inner()).unwrap());
+    assert_eq!(a.stats.all.max_tilt_deg, Some(0.0));
+    assert_eq!(a.stats.all.total_distance_m, None);
+    let facts: Vec<&str> = a.missing.iter().map(|m| m.fact.as_str()).collect();
+    for fact in [
+        "flight_modes, vtol_states, armed",
+        "battery",
+        "gps_quality, gps_track",
+        "vibration",
+    ] {
+        assert!(facts.contains(&fact), "{fact}: {facts:?}");
+    }
+    assert!(a.diagnostics.is_empty());
+}

@@ -4,9 +4,10 @@
 //! idle) for at least 0.3 s (`drop_to_zero`), or at the highest output the motors reached
 //! while the others' median stays 20% of their range below it for at least 1 s
 //! (`locked_at_max`), at least two other motors flying. Motors are the channels below
-//! `noutputs` whose idle output (their value while disarmed, or on the ground before the
-//! first takeoff) is at the bottom of the group's outputs and that ran above it in flight:
-//! servos (centered) and unused channels never count. An episode that begins within 1 s
+//! `noutputs` whose disarmed output is at the bottom of the group's outputs and that ran
+//! above their idle in flight: servos (centered) and unused channels never count. A
+//! motor's idle is its output armed on the ground before the first takeoff, else its
+//! disarmed one. An episode that begins within 1 s
 //! of a disarm or a landing is left out: then every motor stops, which is the end of a
 //! flight, not a failure.
 
@@ -50,13 +51,23 @@ enum Failure {
 
 #[derive(Debug, Clone, Default)]
 struct Channel {
-    idle: Option<f64>,
+    /// The output while disarmed (the last seen before flying).
+    disarmed: Option<f64>,
+    /// The output armed on the ground before the first takeoff.
+    armed_idle: Option<f64>,
     max: f64,
     /// Ran above idle in flight.
     ran: bool,
     /// The open episode: kind, start, mode, value, the others' median.
     episode: Option<(Failure, u64, &'static str, f64, f64)>,
     last: u64,
+}
+
+impl Channel {
+    /// The output a running motor falls back to when it stops.
+    fn idle(&self) -> Option<f64> {
+        self.armed_idle.or(self.disarmed)
+    }
 }
 
 #[derive(Debug, Clone, Default)]
@@ -106,20 +117,23 @@ impl Motors {
         if flying {
             g.taken_off = true;
         } else {
-            // Idle: the value while disarmed, or on the ground before the first flight.
             for (c, &v) in g.channels.iter_mut().zip(&values) {
-                if v.is_finite() && (!state.armed || !g.taken_off) {
-                    c.idle = Some(v);
+                if v.is_finite() {
+                    if !state.armed {
+                        c.disarmed = Some(v);
+                    } else if !g.taken_off {
+                        c.armed_idle = Some(v);
+                    }
                 }
                 c.episode = None;
             }
             return;
         }
-        // The group's idle level: its channels' lowest idle; a motor idles near it.
+        // The group's floor: its channels' lowest disarmed output; a motor rests near it.
         let floor = g
             .channels
             .iter()
-            .filter_map(|c| c.idle)
+            .filter_map(|c| c.disarmed.or(c.armed_idle))
             .fold(f64::INFINITY, f64::min);
         let top = g
             .channels
@@ -132,11 +146,15 @@ impl Motors {
         if !range.is_finite() || range <= 0.0 {
             return;
         }
-        let is_motor = |c: &Channel| c.idle.is_some_and(|i| i <= floor + 0.1 * range);
+        let is_motor = |c: &Channel| {
+            c.disarmed
+                .or(c.armed_idle)
+                .is_some_and(|i| i <= floor + 0.1 * range)
+        };
         for (c, &v) in g.channels.iter_mut().zip(&values) {
             if v.is_finite() {
                 c.max = c.max.max(v);
-                if is_motor(c) && v > c.idle.unwrap_or(floor) + 0.1 * range {
+                if is_motor(c) && v > c.idle().unwrap_or(floor) + 0.1 * range {
                     c.ran = true;
                 }
             }
@@ -161,7 +179,7 @@ impl Motors {
             others.sort_by(f64::total_cmp);
             let median = others[others.len() / 2];
             let c = &mut g.channels[k];
-            let idle = c.idle.unwrap_or(floor);
+            let idle = c.idle().unwrap_or(floor);
             let v = values[k];
             let now = if v < idle + 0.25 * (median - idle) && median > idle + 0.2 * range {
                 Some(Failure::Drop)
