@@ -10,6 +10,10 @@
 //! - `columns`: every row of every topic instance into typed columns ([`ColumnBuilder`]),
 //!   in batches of 64 KiB of rows, no Arrow (a [`StreamReader`] over the file);
 //! - `columns_arrow`: the same, each batch made an Arrow record batch;
+//! - `log_columns`: [`Log::columns`] of every topic instance of the opened (memory-mapped)
+//!   log, each instance's rows in one batch;
+//! - `log_record_batches`: [`arrow::record_batches`] of every topic instance of the opened
+//!   log, batches of 65,536 rows;
 //! - `parquet_one_log`: [`Converter::convert_file`], what `ulog parquet FILE -o DIR` does:
 //!   one streaming pass, ZSTD, `metadata.json`;
 //! - `parquet_many_logs`: [`Converter::convert_files`] of 8 logs of an eighth of the size
@@ -19,7 +23,8 @@
 //! After the run, a table gives the peak resident memory (Linux `VmHWM`, what `time -v`
 //! calls maximum resident set size) of a process of its own doing each benchmark's work
 //! once, beside that of a process doing nothing: the inputs are files, never held in memory
-//! (but `csv_one_log` maps its log, as `ulog csv` does).
+//! (but `csv_one_log` maps its log, as `ulog csv` does); `ULOG_BENCH_NO_PEAK` leaves the
+//! table out.
 
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
@@ -134,6 +139,10 @@ fn main() {
     big();
     many();
     divan::main();
+    if std::env::var_os("ULOG_BENCH_NO_PEAK").is_some() {
+        let _ = std::fs::remove_dir_all(dir());
+        return;
+    }
     println!("\npeak resident memory of a process doing each benchmark's work once (VmHWM):");
     let me = std::env::current_exe().expect("this benchmark");
     for (name, _) in WORKLOADS {
@@ -218,6 +227,51 @@ fn columns(b: Bencher) {
 #[divan::bench(sample_count = 10, sample_size = 1)]
 fn columns_arrow(b: Bencher) {
     b.counter(BytesCount::new(big().1)).bench_local(arrow_pass);
+}
+
+/// The opened benchmark log and its topic instances.
+fn opened() -> &'static (Log<'static>, Vec<(String, u8)>) {
+    static OPENED: OnceLock<(Log<'static>, Vec<(String, u8)>)> = OnceLock::new();
+    OPENED.get_or_init(|| {
+        let log = Log::open(&big().0).expect("the log opens");
+        let mut instances: Vec<(String, u8)> = log
+            .subscriptions()
+            .iter()
+            .map(|s| (s.name.clone(), s.multi_id))
+            .collect();
+        instances.sort();
+        instances.dedup();
+        // Its pages in memory before any sample.
+        for (topic, multi_id) in &instances {
+            black_box(log.columns(topic, *multi_id).map(|c| c.rows()).ok());
+        }
+        (log, instances)
+    })
+}
+
+#[divan::bench(sample_count = 10, sample_size = 1)]
+fn log_columns(b: Bencher) {
+    let (log, instances) = opened();
+    b.counter(BytesCount::new(big().1)).bench_local(|| {
+        for (topic, multi_id) in instances {
+            black_box(log.columns(topic, *multi_id).map(|c| c.rows()).ok());
+        }
+    });
+}
+
+#[divan::bench(sample_count = 10, sample_size = 1)]
+fn log_record_batches(b: Bencher) {
+    let (log, instances) = opened();
+    b.counter(BytesCount::new(big().1)).bench_local(|| {
+        for (topic, multi_id) in instances {
+            for batch in arrow::record_batches(log, topic, *multi_id, 1 << 16)
+                .into_iter()
+                .flatten()
+            {
+                black_box(batch.unwrap().num_rows());
+            }
+        }
+    });
 }
 
 #[divan::bench(sample_count = 10, sample_size = 1)]

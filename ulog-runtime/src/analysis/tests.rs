@@ -258,9 +258,8 @@ fn flight(faults: Faults) -> Vec<u8> {
             let motor = |k: usize| -> f32 {
                 if !armed(t) || t >= 55 * S - 50_000 {
                     900.0
-                } else if !in_air(t) {
-                    1100.0
-                } else if faults.motor && k == 2 && within(t, 40, 42) {
+                } else if !in_air(t) || (faults.motor && k == 2 && within(t, 40, 42)) {
+                    // Idle: on the ground, or the motor that quits.
                     1100.0
                 } else {
                     1500.0 + 10.0 * k as f32

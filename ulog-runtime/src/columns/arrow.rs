@@ -39,7 +39,7 @@ use arrow_array::{
 };
 use arrow_schema::{ArrowError, DataType, Field, Schema, SchemaRef};
 
-use super::{ColumnBuilder, ColumnKind, ColumnSpec, ColumnValues, Columns};
+use super::{ColumnKind, ColumnSpec, ColumnValues, Columns};
 use crate::read::{InstanceRows, Log};
 use crate::schema::Primitive;
 
@@ -118,7 +118,7 @@ fn array(values: ColumnValues) -> ArrayRef {
 /// The record batches of one topic instance of a log, each of at most `rows` rows
 /// ([`record_batches`]); an Arrow [`RecordBatchReader`](arrow_array::RecordBatchReader).
 pub struct RecordBatches<'a> {
-    builder: ColumnBuilder,
+    spec: Arc<ColumnSpec>,
     schema: SchemaRef,
     source: InstanceRows<'a>,
     rows: usize,
@@ -145,7 +145,7 @@ pub fn record_batches<'a>(
     let spec = ColumnSpec::of(log.metadata().schema(), subs.first()?.format()?)?;
     let schema = schema(&spec, topic);
     Some(RecordBatches {
-        builder: ColumnBuilder::with_capacity(spec, rows.clamp(1, 1 << 16)),
+        spec: Arc::new(spec),
         schema,
         source: log.instance_rows(&subs),
         rows: rows.max(1),
@@ -162,12 +162,21 @@ impl Iterator for RecordBatches<'_> {
     type Item = Result<RecordBatch, ArrowError>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        let builder = &mut self.builder;
-        while builder.rows() < self.rows {
-            let Some(row) = self.source.next() else { break };
-            builder.push(row.data, row.timestamp);
+        loop {
+            let mut read = 0;
+            let rows = (&mut self.source)
+                .take(self.rows)
+                .inspect(|_| read += 1)
+                .map(|r| (r.data, r.timestamp));
+            let columns = Columns::from_rows(self.spec.clone(), rows, self.rows.min(1 << 16));
+            if columns.rows() > 0 {
+                return Some(record_batch(&self.schema, columns));
+            }
+            // Rows too short for the format are left out; only the end ends the batches.
+            if read == 0 {
+                return None;
+            }
         }
-        (builder.rows() > 0).then(|| record_batch(&self.schema, builder.take()))
     }
 }
 
@@ -203,7 +212,7 @@ mod tests {
         assert_eq!(s.metadata()["ulog.topic"], "t");
         assert_eq!(s.field(13).metadata()["ulog.type"], "char[3]");
         assert!(s.metadata()["ulog.format"].starts_with("t:uint64_t timestamp;"));
-        let mut b = ColumnBuilder::new(spec);
+        let mut b = super::super::ColumnBuilder::new(spec);
         let mut row = 7u64.to_le_bytes().to_vec();
         row.extend_from_slice(&[0xFE, 2, 3, 0, 4, 0, 5, 0, 0, 0, 6, 0, 0, 0]);
         row.extend_from_slice(&(-7i64).to_le_bytes());

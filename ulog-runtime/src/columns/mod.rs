@@ -7,8 +7,9 @@
 //! `u64`, unwrapped for version-0 logs), then every leaf in format order, named as pyulog
 //! names them (`q[0]`, `esc[3].esc_rpm`), padding hidden, each `char[N]` array one text
 //! column (the bytes up to the first zero, each as one character, as pyulog's `ulog2csv`
-//! shows them). [`ColumnBuilder`] fills them row by row in one pass, one type dispatch per
-//! run of same-typed leaves, and hands them over in batches of any size.
+//! shows them). [`ColumnBuilder`] takes rows in one pass (a copy of each row's bytes,
+//! made columns every few kilobytes, one loop a column) and hands them over as columns in
+//! batches of any size; [`RowBatch`] holds rows to be made columns later.
 //!
 //! ```
 //! use ulog_runtime::{Log, ULog, Writer, WriterOptions};
@@ -87,44 +88,10 @@ pub enum Source {
 pub struct ColumnSpec {
     format: String,
     columns: Vec<ColumnDef>,
-    /// The leaves in row order, merged into runs of one type: (offset, count, type, index of
-    /// the first column among the columns of that type).
-    runs: Vec<(usize, usize, Primitive, usize)>,
-    /// Text columns: (offset, len).
-    texts: Vec<(usize, usize)>,
-    /// Per column, in output order: its type store and index there.
-    slots: Vec<Slot>,
-    /// Columns per type store.
-    counts: [usize; STORES],
-    /// The timestamp column's index in the `u64` store, if the format has a timestamp.
-    timestamp: Option<usize>,
-}
-
-/// The typed stores: one per basic type, and text.
-const STORES: usize = 13;
-const TEXT_STORE: usize = 12;
-
-#[derive(Debug, Clone, Copy)]
-struct Slot {
-    store: usize,
-    index: usize,
-}
-
-fn store_of(p: Primitive) -> usize {
-    match p {
-        Primitive::Int8 => 0,
-        Primitive::UInt8 => 1,
-        Primitive::Int16 => 2,
-        Primitive::UInt16 => 3,
-        Primitive::Int32 => 4,
-        Primitive::UInt32 => 5,
-        Primitive::Int64 => 6,
-        Primitive::UInt64 => 7,
-        Primitive::Float => 8,
-        Primitive::Double => 9,
-        Primitive::Bool => 10,
-        Primitive::Char => 11,
-    }
+    /// Bytes of a row the columns read.
+    row_len: usize,
+    /// Bytes a row takes once in columns.
+    stored_row_size: usize,
 }
 
 impl ColumnSpec {
@@ -165,11 +132,8 @@ impl ColumnSpec {
         let mut spec = ColumnSpec {
             format: schema.format(id).to_string(),
             columns: Vec::with_capacity(leaves.len()),
-            runs: Vec::new(),
-            texts: Vec::new(),
-            slots: Vec::with_capacity(leaves.len()),
-            counts: [0; STORES],
-            timestamp: None,
+            row_len: 0,
+            stored_row_size: 8,
         };
         // `timestamp` first, as ulog2csv writes it: the row's (unwrapped) timestamp.
         let order = timestamp
@@ -182,33 +146,14 @@ impl ColumnSpec {
             } else {
                 (kind, Source::Offset(offset))
             };
-            let store = match kind {
-                ColumnKind::Value(p) => store_of(p),
-                ColumnKind::Text { .. } => TEXT_STORE,
-            };
-            spec.slots.push(Slot {
-                store,
-                index: spec.counts[store],
-            });
-            spec.counts[store] += 1;
-            match (kind, source) {
-                (ColumnKind::Value(p), Source::Offset(at)) => {
-                    let first = spec.slots.last().expect("just pushed").index;
-                    match spec.runs.last_mut() {
-                        Some(run)
-                            if run.2 == p
-                                && run.0 + run.1 * p.size() == at
-                                && run.3 + run.1 == first =>
-                        {
-                            run.1 += 1;
-                        }
-                        _ => spec.runs.push((at, 1, p, first)),
-                    }
-                }
-                (ColumnKind::Text { len }, Source::Offset(at)) => spec.texts.push((at, len)),
-                (_, Source::Timestamp) => {
-                    spec.timestamp = Some(spec.slots.last().expect("just pushed").index);
-                }
+            if let Source::Offset(at) = source {
+                let (len, stored) = match kind {
+                    ColumnKind::Value(p) => (p.size(), p.size()),
+                    // A `String`, and its bytes.
+                    ColumnKind::Text { len } => (len, len + 24),
+                };
+                spec.row_len = spec.row_len.max(at + len);
+                spec.stored_row_size += stored;
             }
             spec.columns.push(ColumnDef {
                 name,
@@ -234,16 +179,12 @@ impl ColumnSpec {
     /// Bytes a row takes once in columns: the timestamp's 8, each value's size, a text's
     /// length and its `String` (24).
     pub fn stored_row_size(&self) -> usize {
-        let values: usize = self.runs.iter().map(|r| r.1 * r.2.size()).sum();
-        let texts: usize = self.texts.iter().map(|t| t.1 + 24).sum();
-        8 + values + texts
+        self.stored_row_size
     }
 
     /// Bytes of a row the columns read: rows shorter than this are not taken.
     pub fn row_len(&self) -> usize {
-        let runs = self.runs.iter().map(|r| r.0 + r.1 * r.2.size());
-        let texts = self.texts.iter().map(|t| t.0 + t.1);
-        runs.chain(texts).max().unwrap_or(0)
+        self.row_len
     }
 }
 
@@ -457,57 +398,24 @@ impl Columns {
     }
 }
 
-/// Fills the columns of a [`ColumnSpec`] row by row, in one pass ([module docs](self)).
+/// Fills the columns of a [`ColumnSpec`] row by row, in one pass ([module docs](self)):
+/// rows are copied as they are into a small [`RowBatch`] (no dispatch a leaf), which is
+/// turned into columns each time it fills, one column at a time over rows still in cache.
 #[derive(Debug, Clone)]
 pub struct ColumnBuilder {
     spec: Arc<ColumnSpec>,
-    need: usize,
-    stores: Stores,
+    staged: RowBatch,
+    /// Rows a staged batch holds before it is made columns.
+    stage_rows: usize,
+    columns: Vec<ColumnValues>,
+    /// Rows in `columns`.
     rows: usize,
-    /// Rows each column has room for after a [`ColumnBuilder::take`].
+    /// Rows room is kept for after a [`ColumnBuilder::take`].
     capacity: usize,
 }
 
-/// One vector per column, grouped by type.
-#[derive(Debug, Clone, Default)]
-struct Stores {
-    i8: Vec<Vec<i8>>,
-    u8: Vec<Vec<u8>>,
-    i16: Vec<Vec<i16>>,
-    u16: Vec<Vec<u16>>,
-    i32: Vec<Vec<i32>>,
-    u32: Vec<Vec<u32>>,
-    i64: Vec<Vec<i64>>,
-    u64: Vec<Vec<u64>>,
-    f32: Vec<Vec<f32>>,
-    f64: Vec<Vec<f64>>,
-    bool: Vec<Vec<bool>>,
-    char: Vec<Vec<u8>>,
-    text: Vec<Vec<String>>,
-}
-
-impl Stores {
-    fn new(counts: &[usize; STORES], capacity: usize) -> Stores {
-        fn make<T>(n: usize, capacity: usize) -> Vec<Vec<T>> {
-            (0..n).map(|_| Vec::with_capacity(capacity)).collect()
-        }
-        Stores {
-            i8: make(counts[0], capacity),
-            u8: make(counts[1], capacity),
-            i16: make(counts[2], capacity),
-            u16: make(counts[3], capacity),
-            i32: make(counts[4], capacity),
-            u32: make(counts[5], capacity),
-            i64: make(counts[6], capacity),
-            u64: make(counts[7], capacity),
-            f32: make(counts[8], capacity),
-            f64: make(counts[9], capacity),
-            bool: make(counts[10], capacity),
-            char: make(counts[11], capacity),
-            text: make(counts[TEXT_STORE], capacity),
-        }
-    }
-}
+/// Bytes of rows staged before they are made columns: well within a core's L2 cache.
+const STAGE_BYTES: usize = 32 << 10;
 
 impl ColumnBuilder {
     /// An empty builder.
@@ -519,18 +427,20 @@ impl ColumnBuilder {
     /// [`ColumnBuilder::take`]).
     pub fn with_capacity(spec: impl Into<Arc<ColumnSpec>>, rows: usize) -> ColumnBuilder {
         let spec = spec.into();
+        let stage_rows = (STAGE_BYTES / spec.row_len.max(1)).clamp(1, 4096);
         ColumnBuilder {
-            need: spec.row_len(),
-            stores: Stores::new(&spec.counts, rows),
-            spec,
+            staged: RowBatch::with_capacity(spec.clone(), stage_rows),
+            stage_rows,
+            columns: empty_columns(&spec, rows),
             rows: 0,
             capacity: rows,
+            spec,
         }
     }
 
     /// Rows taken since the last [`ColumnBuilder::take`].
     pub fn rows(&self) -> usize {
-        self.rows
+        self.rows + self.staged.rows()
     }
 
     /// The spec it builds by.
@@ -542,85 +452,210 @@ impl ColumnBuilder {
     /// Returns `false`, adding nothing, if `data` is shorter than the columns need.
     #[inline]
     pub fn push(&mut self, data: &[u8], timestamp: u64) -> bool {
-        let Some(data) = data.get(..self.need) else {
+        if !self.staged.push(data, timestamp) {
             return false;
-        };
-        let s = &mut self.stores;
-        if let Some(ts) = self.spec.timestamp {
-            s.u64[ts].push(timestamp);
         }
-        for &(at, n, p, first) in &self.spec.runs {
-            macro_rules! take {
-                ($store:ident, $ty:ty) => {{
-                    const SIZE: usize = size_of::<$ty>();
-                    let bytes = &data[at..at + n * SIZE];
-                    let (chunks, _) = bytes.as_chunks::<SIZE>();
-                    for (col, c) in s.$store[first..first + n].iter_mut().zip(chunks) {
-                        col.push(<$ty>::from_le_bytes(*c));
-                    }
-                }};
-            }
-            match p {
-                Primitive::Int8 => take!(i8, i8),
-                Primitive::UInt8 => take!(u8, u8),
-                Primitive::Int16 => take!(i16, i16),
-                Primitive::UInt16 => take!(u16, u16),
-                Primitive::Int32 => take!(i32, i32),
-                Primitive::UInt32 => take!(u32, u32),
-                Primitive::Int64 => take!(i64, i64),
-                Primitive::UInt64 => take!(u64, u64),
-                Primitive::Float => take!(f32, f32),
-                Primitive::Double => take!(f64, f64),
-                Primitive::Bool => {
-                    for (col, &b) in s.bool[first..first + n].iter_mut().zip(&data[at..at + n]) {
-                        col.push(b != 0);
-                    }
-                }
-                Primitive::Char => {
-                    for (col, &b) in s.char[first..first + n].iter_mut().zip(&data[at..at + n]) {
-                        col.push(b);
-                    }
-                }
-            }
+        if self.staged.rows() >= self.stage_rows {
+            self.unstage();
         }
-        for (col, &(at, len)) in s.text.iter_mut().zip(&self.spec.texts) {
-            col.push(text(&data[at..at + len]));
-        }
-        self.rows += 1;
         true
+    }
+
+    /// Makes the staged rows columns.
+    fn unstage(&mut self) {
+        self.rows += self.staged.rows();
+        self.staged.append_to(&mut self.columns);
     }
 
     /// The columns of the rows taken so far; the builder starts again empty (for batches of
     /// a bounded size).
     pub fn take(&mut self) -> Columns {
-        let fresh = Stores::new(&self.spec.counts, self.capacity);
-        let mut s = std::mem::replace(&mut self.stores, fresh);
-        let rows = std::mem::take(&mut self.rows);
-        let values = self
-            .spec
-            .slots
-            .iter()
-            .map(|&Slot { store, index: i }| match store {
-                0 => ColumnValues::Int8(std::mem::take(&mut s.i8[i])),
-                1 => ColumnValues::UInt8(std::mem::take(&mut s.u8[i])),
-                2 => ColumnValues::Int16(std::mem::take(&mut s.i16[i])),
-                3 => ColumnValues::UInt16(std::mem::take(&mut s.u16[i])),
-                4 => ColumnValues::Int32(std::mem::take(&mut s.i32[i])),
-                5 => ColumnValues::UInt32(std::mem::take(&mut s.u32[i])),
-                6 => ColumnValues::Int64(std::mem::take(&mut s.i64[i])),
-                7 => ColumnValues::UInt64(std::mem::take(&mut s.u64[i])),
-                8 => ColumnValues::Float(std::mem::take(&mut s.f32[i])),
-                9 => ColumnValues::Double(std::mem::take(&mut s.f64[i])),
-                10 => ColumnValues::Bool(std::mem::take(&mut s.bool[i])),
-                11 => ColumnValues::Char(std::mem::take(&mut s.char[i])),
-                _ => ColumnValues::Text(std::mem::take(&mut s.text[i])),
-            })
-            .collect();
+        self.unstage();
+        let values = std::mem::replace(&mut self.columns, empty_columns(&self.spec, self.capacity));
         Columns {
             spec: self.spec.clone(),
             values,
+            rows: std::mem::take(&mut self.rows),
+        }
+    }
+}
+
+/// Rows of one [`ColumnSpec`] as they came, not yet columns: each row's first
+/// [`ColumnSpec::row_len`] bytes back to back, and the rows' timestamps. Collecting rows
+/// costs a copy of their bytes; [`RowBatch::columns`] makes the columns later (on another
+/// thread, say).
+#[derive(Debug, Clone)]
+pub struct RowBatch {
+    spec: Arc<ColumnSpec>,
+    bytes: Vec<u8>,
+    timestamps: Vec<u64>,
+}
+
+impl RowBatch {
+    /// An empty batch with room for `rows` rows.
+    pub fn with_capacity(spec: Arc<ColumnSpec>, rows: usize) -> RowBatch {
+        RowBatch {
+            bytes: Vec::with_capacity(rows * spec.row_len),
+            timestamps: Vec::with_capacity(rows),
+            spec,
+        }
+    }
+
+    /// Adds one row (as [`ColumnBuilder::push`]); `false`, adding nothing, if `data` is
+    /// shorter than the columns need.
+    #[inline]
+    pub fn push(&mut self, data: &[u8], timestamp: u64) -> bool {
+        let Some(data) = data.get(..self.spec.row_len) else {
+            return false;
+        };
+        self.bytes.extend_from_slice(data);
+        self.timestamps.push(timestamp);
+        true
+    }
+
+    /// The number of rows.
+    pub fn rows(&self) -> usize {
+        self.timestamps.len()
+    }
+
+    /// Bytes the batch holds.
+    pub fn memory(&self) -> usize {
+        self.bytes.capacity() + self.timestamps.capacity() * 8
+    }
+
+    /// The spec of the rows.
+    pub fn spec(&self) -> &Arc<ColumnSpec> {
+        &self.spec
+    }
+
+    /// The rows' columns, in the spec's order.
+    pub fn columns(mut self) -> Columns {
+        let rows = self.rows();
+        let mut values = empty_columns(&self.spec, rows);
+        let stage_rows = (STAGE_BYTES / self.spec.row_len.max(1)).max(1);
+        if rows <= stage_rows {
+            self.append_to(&mut values);
+        } else {
+            // A block at a time, so that each column's loop reads rows still in cache.
+            let mut block = RowBatch::with_capacity(self.spec.clone(), 0);
+            let stride = self.spec.row_len;
+            for (bytes, timestamps) in self
+                .bytes
+                .chunks(stage_rows * stride.max(1))
+                .zip(self.timestamps.chunks(stage_rows))
+            {
+                block.bytes.extend_from_slice(bytes);
+                block.timestamps.extend_from_slice(timestamps);
+                block.append_to(&mut values);
+            }
+        }
+        Columns {
+            spec: self.spec,
+            values,
             rows,
         }
+    }
+
+    /// Appends the rows to `columns` (one vector per column of the spec), leaving the batch
+    /// empty.
+    fn append_to(&mut self, columns: &mut [ColumnValues]) {
+        // A spec without value columns reads no bytes: its rows are empty.
+        let rows = self.bytes.chunks_exact(self.spec.row_len.max(1));
+        append(&self.spec, rows, &self.timestamps, columns);
+        self.bytes.clear();
+        self.timestamps.clear();
+    }
+}
+
+impl Columns {
+    /// The columns of `rows` (with their timestamps; rows shorter than
+    /// [`ColumnSpec::row_len`] left out), `capacity` rows expected.
+    pub(crate) fn from_rows<'r>(
+        spec: Arc<ColumnSpec>,
+        rows: impl Iterator<Item = (&'r [u8], u64)>,
+        capacity: usize,
+    ) -> Columns {
+        let mut b = ColumnBuilder::with_capacity(spec, capacity);
+        for (data, timestamp) in rows {
+            b.push(data, timestamp);
+        }
+        b.take()
+    }
+}
+
+/// Appends `rows` (one item a row, at least the spec's `row_len` bytes; iterated once a
+/// column) and their `timestamps` to `columns`, one vector per column of `spec`.
+fn append<'r, I>(spec: &ColumnSpec, rows: I, timestamps: &[u64], columns: &mut [ColumnValues])
+where
+    I: Iterator<Item = &'r [u8]> + Clone,
+{
+    for (c, values) in spec.columns.iter().zip(columns.iter_mut()) {
+        match (c.source, c.kind) {
+            (Source::Timestamp, _) => {
+                if let ColumnValues::UInt64(v) = values {
+                    v.extend_from_slice(timestamps);
+                }
+            }
+            (Source::Offset(at), ColumnKind::Value(_)) => gather(rows.clone(), at, values),
+            (Source::Offset(at), ColumnKind::Text { len }) => {
+                if let ColumnValues::Text(v) = values {
+                    v.extend(rows.clone().map(|r| text(&r[at..at + len])));
+                }
+            }
+        }
+    }
+}
+
+/// Empty vectors for the columns of `spec`, with room for `rows` values each.
+fn empty_columns(spec: &ColumnSpec, rows: usize) -> Vec<ColumnValues> {
+    spec.columns
+        .iter()
+        .map(|c| match c.kind {
+            ColumnKind::Value(p) => match p {
+                Primitive::Int8 => ColumnValues::Int8(Vec::with_capacity(rows)),
+                Primitive::UInt8 => ColumnValues::UInt8(Vec::with_capacity(rows)),
+                Primitive::Int16 => ColumnValues::Int16(Vec::with_capacity(rows)),
+                Primitive::UInt16 => ColumnValues::UInt16(Vec::with_capacity(rows)),
+                Primitive::Int32 => ColumnValues::Int32(Vec::with_capacity(rows)),
+                Primitive::UInt32 => ColumnValues::UInt32(Vec::with_capacity(rows)),
+                Primitive::Int64 => ColumnValues::Int64(Vec::with_capacity(rows)),
+                Primitive::UInt64 => ColumnValues::UInt64(Vec::with_capacity(rows)),
+                Primitive::Float => ColumnValues::Float(Vec::with_capacity(rows)),
+                Primitive::Double => ColumnValues::Double(Vec::with_capacity(rows)),
+                Primitive::Bool => ColumnValues::Bool(Vec::with_capacity(rows)),
+                Primitive::Char => ColumnValues::Char(Vec::with_capacity(rows)),
+            },
+            ColumnKind::Text { .. } => ColumnValues::Text(Vec::with_capacity(rows)),
+        })
+        .collect()
+}
+
+/// Appends to one column the value at `at` of each row.
+#[inline]
+fn gather<'r>(rows: impl Iterator<Item = &'r [u8]>, at: usize, values: &mut ColumnValues) {
+    macro_rules! extend {
+        ($v:expr, $ty:ty) => {{
+            const SIZE: usize = size_of::<$ty>();
+            $v.extend(rows.map(|r| {
+                let (v, _) = r[at..].split_first_chunk::<SIZE>().expect("in the row");
+                <$ty>::from_le_bytes(*v)
+            }));
+        }};
+    }
+    match values {
+        ColumnValues::Int8(v) => extend!(v, i8),
+        ColumnValues::UInt8(v) => v.extend(rows.map(|r| r[at])),
+        ColumnValues::Int16(v) => extend!(v, i16),
+        ColumnValues::UInt16(v) => extend!(v, u16),
+        ColumnValues::Int32(v) => extend!(v, i32),
+        ColumnValues::UInt32(v) => extend!(v, u32),
+        ColumnValues::Int64(v) => extend!(v, i64),
+        ColumnValues::UInt64(v) => extend!(v, u64),
+        ColumnValues::Float(v) => extend!(v, f32),
+        ColumnValues::Double(v) => extend!(v, f64),
+        ColumnValues::Bool(v) => v.extend(rows.map(|r| r[at] != 0)),
+        ColumnValues::Char(v) => v.extend(rows.map(|r| r[at])),
+        ColumnValues::Text(_) => {}
     }
 }
 
@@ -772,11 +807,11 @@ impl Log<'_> {
         let id = first.format().ok_or_else(unreadable)?;
         let spec = ColumnSpec::of(self.metadata().schema(), id).ok_or_else(unreadable)?;
         let rows = subs.iter().map(|s| self.rows(s).len()).sum();
-        let mut builder = ColumnBuilder::with_capacity(spec, rows);
-        for row in self.instance_rows(&subs) {
-            builder.push(row.data, row.timestamp);
-        }
-        Ok(builder.take())
+        Ok(Columns::from_rows(
+            Arc::new(spec),
+            self.instance_rows(&subs).map(|r| (r.data, r.timestamp)),
+            rows,
+        ))
     }
 
     /// The subscriptions of one topic instance whose format can be read, in file order.

@@ -118,6 +118,47 @@ fn rows_fill_typed_columns_in_batches() {
 }
 
 #[test]
+fn many_rows_fill_columns_across_the_builders_stages() {
+    // More rows than a stage holds, in a builder and in a row batch made columns later: every
+    // value where it belongs.
+    let (_, spec) = spec_of(&FORMATS, "outer", false);
+    let spec = std::sync::Arc::new(spec);
+    let mut b = ColumnBuilder::new(spec.clone());
+    let mut batch = RowBatch::with_capacity(spec.clone(), 0);
+    let n = 10_000u32;
+    for i in 0..n {
+        let f = i as f32;
+        let data = row(
+            [f, -f],
+            u64::from(i),
+            [(i as i16, f64::from(i) / 4.0), (-(i as i16), 0.5)],
+            if i % 2 == 0 { b"even" } else { b"odd\0" },
+            (i % 3) as u8,
+            (i % 256) as u8,
+        );
+        assert!(b.push(&data, u64::from(i) * 10));
+        assert!(batch.push(&data, u64::from(i) * 10));
+    }
+    let built = b.take();
+    assert_eq!(built, batch.columns(), "a builder and a row batch agree");
+    assert_eq!(built.rows(), n as usize);
+    let q1 = built.get("q[1]").unwrap().as_float().unwrap();
+    let e0a = built.get("e[0].a").unwrap().as_int16().unwrap();
+    let e0b = built.get("e[0].b").unwrap().as_double().unwrap();
+    let ts = built.get("timestamp").unwrap().as_uint64().unwrap();
+    let name = built.get("name").unwrap().as_text().unwrap();
+    let ok = built.get("ok").unwrap().as_bool().unwrap();
+    for i in [0, 1, 999, 1000, 4097, 9_999usize] {
+        assert_eq!(q1[i], -(i as f32), "row {i}");
+        assert_eq!(e0a[i], i as i16, "row {i}");
+        assert_eq!(e0b[i], i as f64 / 4.0, "row {i}");
+        assert_eq!(ts[i], i as u64 * 10, "row {i}");
+        assert_eq!(name[i], if i % 2 == 0 { "even" } else { "odd" }, "row {i}");
+        assert_eq!(ok[i], i % 3 != 0, "row {i}");
+    }
+}
+
+#[test]
 fn a_log_gives_the_columns_of_an_instance_with_unwrapped_timestamps() {
     // Version 0 with a uint16_t timestamp that wraps: the column holds the unwrapped µs.
     let mut f = FileHeader {

@@ -241,7 +241,13 @@ impl<'a> Iterator for InstanceRows<'a> {
     fn next(&mut self) -> Option<super::Row<'a>> {
         match self {
             InstanceRows::One(rows) => rows.next(),
-            InstanceRows::Merged(log, offsets) => offsets.next().map(|at| log.row_at(at)),
+            InstanceRows::Merged(log, offsets) => {
+                let at = offsets.next()?;
+                if let Some(&ahead) = offsets.as_slice().get(super::log::PREFETCH_ROWS) {
+                    super::log::prefetch(log.bytes(), ahead, 128);
+                }
+                Some(log.row_at(at))
+            }
         }
     }
 

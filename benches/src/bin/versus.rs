@@ -1,0 +1,264 @@
+//! Whole programs side by side, in one run: `ulog` against PX4's flight-review-rs converter
+//! (`ulog-convert`, from `../shared/tools/flight-review-rs/`) and the `scan` example against
+//! px4-ulog 0.6.1 (`px4_ulog_scan`), on the same log, interleaved (ours, theirs, ours...,
+//! the order alternating run by run), page cache warmed by a first untimed run of each.
+//! Prints, per comparison, the medians of wall time, CPU time (user + system) and peak
+//! resident memory of both programs and their ratios, with the CPU model.
+//!
+//! ```text
+//! cargo build --release -p ulog-runtime --features cli --bin ulog
+//! cargo build --release -p examples --example scan
+//! cargo build --release -p ulog-benches --bin px4_ulog_scan --bin versus
+//! target/release/versus [--runs N] [--only NAME]... LOG
+//! ```
+//!
+//! Comparisons (`--only` picks some):
+//! - `parquet`: `ulog parquet LOG -o DIR` (analysis included) against `ulog-convert LOG DIR`;
+//! - `analysis`: `ulog analyze --json LOG` against `ulog-convert --metadata-only LOG DIR`;
+//! - `scan`: `scan LOG` (memory map, both cores) against `px4_ulog_scan LOG`;
+//! - `scan_stream`: `scan --stream LOG` (one core) against `px4_ulog_scan LOG`.
+//!
+//! The programs are found beside this one (`target/release/`), `ulog-convert` in
+//! `../shared/tools/flight-review-rs/` of the workspace; `ULOG_CONVERT` overrides it.
+
+// `wait4` gives the CPU time and peak memory of one child; std gives neither.
+#![allow(unsafe_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode, Stdio};
+use std::time::Instant;
+
+/// One program's run.
+#[derive(Clone, Copy)]
+struct Measure {
+    wall: f64,
+    cpu: f64,
+    rss_mib: f64,
+}
+
+/// A program to run: its path, arguments, and the output folder it writes (emptied first).
+struct Program {
+    label: String,
+    path: PathBuf,
+    args: Vec<String>,
+    out: Option<PathBuf>,
+}
+
+impl Program {
+    fn run(&self) -> Result<Measure, String> {
+        if let Some(out) = &self.out {
+            if out.exists() {
+                std::fs::remove_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+            }
+            std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+        }
+        let start = Instant::now();
+        let child = Command::new(&self.path)
+            .args(&self.args)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .map_err(|e| format!("{}: {e}", self.path.display()))?;
+        let pid = libc::pid_t::try_from(child.id()).map_err(|e| e.to_string())?;
+        let mut status = 0;
+        // SAFETY: an all-zero `rusage` is a valid value of that plain C struct.
+        let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+        // SAFETY: `pid` is our child, not yet reaped (std's `Child` is never waited on);
+        // `status` and `usage` are valid for writes.
+        let reaped = unsafe { libc::wait4(pid, &raw mut status, 0, &raw mut usage) };
+        let wall = start.elapsed().as_secs_f64();
+        if reaped != pid {
+            return Err(format!("{}: wait4 failed", self.label));
+        }
+        if !libc::WIFEXITED(status) || libc::WEXITSTATUS(status) != 0 {
+            let mut err = String::new();
+            if let Some(mut e) = child.stderr {
+                use std::io::Read;
+                let _ = e.read_to_string(&mut err);
+            }
+            return Err(format!("{} failed (status {status}): {err}", self.label));
+        }
+        let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 / 1e6;
+        Ok(Measure {
+            wall,
+            cpu: secs(usage.ru_utime) + secs(usage.ru_stime),
+            rss_mib: usage.ru_maxrss as f64 / 1024.0,
+        })
+    }
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        (v[n / 2 - 1] + v[n / 2]) / 2.0
+    }
+}
+
+fn cpu_model() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_owned())
+        })
+        .unwrap_or_else(|| "unknown".to_owned())
+}
+
+fn main() -> ExitCode {
+    let mut runs = 5usize;
+    let mut only: Vec<String> = Vec::new();
+    let mut log = None;
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        match a.as_str() {
+            "--runs" => match args.next().and_then(|n| n.parse().ok()) {
+                Some(n) if n > 0 => runs = n,
+                _ => return usage("--runs takes a positive number"),
+            },
+            "--only" => match args.next() {
+                Some(n) => only.push(n),
+                None => return usage("--only takes a comparison's name"),
+            },
+            _ if log.is_none() && !a.starts_with('-') => log = Some(a),
+            _ => return usage(&format!("unexpected argument `{a}`")),
+        }
+    }
+    let Some(log) = log else {
+        return usage("no log given");
+    };
+    match compare(&log, runs, &only) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("versus: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn usage(why: &str) -> ExitCode {
+    eprintln!("versus: {why}\nusage: versus [--runs N] [--only NAME]... LOG");
+    ExitCode::from(2)
+}
+
+fn compare(log: &str, runs: usize, only: &[String]) -> Result<(), String> {
+    let here = std::env::current_exe().map_err(|e| e.to_string())?;
+    let dir = here.parent().ok_or("no folder of this program")?;
+    let convert = std::env::var_os("ULOG_CONVERT").map_or_else(
+        || {
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../shared/tools/flight-review-rs/ulog-convert")
+        },
+        PathBuf::from,
+    );
+    let work = std::env::temp_dir().join(format!("ulog-versus-{}", std::process::id()));
+    let prog = |label: &str, path: PathBuf, args: &[&str], out: Option<&str>| Program {
+        label: label.to_owned(),
+        path,
+        args: args.iter().map(|s| (*s).to_owned()).collect(),
+        out: out.map(|o| work.join(o)),
+    };
+    let ours_out = work.join("ours").display().to_string();
+    let theirs_out = work.join("theirs").display().to_string();
+    let ulog = dir.join("ulog");
+    let scan = dir.join("examples/scan");
+    let px4 = dir.join("px4_ulog_scan");
+    let pairs = [
+        (
+            "parquet",
+            prog(
+                "ulog parquet",
+                ulog.clone(),
+                &["parquet", log, "-o", &ours_out],
+                Some("ours"),
+            ),
+            prog(
+                "ulog-convert",
+                convert.clone(),
+                &[log, &theirs_out],
+                Some("theirs"),
+            ),
+        ),
+        (
+            "analysis",
+            prog(
+                "ulog analyze --json",
+                ulog,
+                &["analyze", "--json", log],
+                None,
+            ),
+            prog(
+                "ulog-convert --metadata-only",
+                convert,
+                &["--metadata-only", log, &theirs_out],
+                Some("theirs"),
+            ),
+        ),
+        (
+            "scan",
+            prog("scan", scan.clone(), &[log], None),
+            prog("px4_ulog_scan", px4.clone(), &[log], None),
+        ),
+        (
+            "scan_stream",
+            prog("scan --stream", scan, &[log, "--stream"], None),
+            prog("px4_ulog_scan", px4, &[log], None),
+        ),
+    ];
+    let chosen: Vec<_> = pairs
+        .iter()
+        .filter(|(name, ..)| only.is_empty() || only.iter().any(|o| o == name))
+        .collect();
+    if chosen.is_empty() {
+        return Err(format!("no comparison named {only:?}"));
+    }
+    println!(
+        "CPU: {}; {} runs each, interleaved; log {log}",
+        cpu_model(),
+        runs
+    );
+    let mut results: Vec<(Vec<Measure>, Vec<Measure>)> =
+        vec![(Vec::new(), Vec::new()); chosen.len()];
+    // A first run of each warms the page cache and checks that both work.
+    for (_, ours, theirs) in &chosen {
+        ours.run()?;
+        theirs.run()?;
+    }
+    for r in 0..runs {
+        for (i, (_, ours, theirs)) in chosen.iter().enumerate() {
+            if r % 2 == 0 {
+                results[i].0.push(ours.run()?);
+                results[i].1.push(theirs.run()?);
+            } else {
+                results[i].1.push(theirs.run()?);
+                results[i].0.push(ours.run()?);
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&work);
+    for ((name, ours, theirs), (o, t)) in chosen.iter().zip(&results) {
+        let med = |m: &[Measure], f: fn(&Measure) -> f64| median(m.iter().map(f).collect());
+        let row = |label: &str, m: &[Measure]| {
+            println!(
+                "  {label:<30} wall {:>7.3} s  cpu {:>7.3} s  peak RSS {:>7.1} MiB",
+                med(m, |x| x.wall),
+                med(m, |x| x.cpu),
+                med(m, |x| x.rss_mib)
+            );
+        };
+        println!("{name}:");
+        row(&ours.label, o);
+        row(&theirs.label, t);
+        println!(
+            "  ratio (ours / theirs)          wall {:>7.3}    cpu {:>7.3}    peak RSS {:>7.3}",
+            med(o, |x| x.wall) / med(t, |x| x.wall),
+            med(o, |x| x.cpu) / med(t, |x| x.cpu),
+            med(o, |x| x.rss_mib) / med(t, |x| x.rss_mib)
+        );
+    }
+    Ok(())
+}
