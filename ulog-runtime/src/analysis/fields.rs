@@ -1,24 +1,98 @@
 //! Per-field statistics: minimum, maximum and mean of every numeric field of every topic
-//! instance (`bool` and `char` left out, `timestamp` too), over its finite values, each
-//! row's leaves taken as typed runs.
+//! instance (`bool` and `char` left out, `timestamp` too), over its finite values. Rows are
+//! staged as they come (a copy of their bytes) and each full stage is reduced one field at
+//! a time, in a loop over rows still in cache; or the statistics are taken from columns
+//! already made ([`ColumnStats`], what the Parquet conversion does with its own).
+
+use std::sync::Arc;
 
 use super::FieldStat;
+use crate::columns::{ColumnKind, ColumnSpec, ColumnValues, Columns, RowBatch, Source};
 use crate::read::Subscription;
 use crate::schema::{Primitive, Schema};
-use crate::value::{RowPlan, VisitLeaves};
 
-/// One topic instance's fields.
+/// Bytes of rows staged before they are reduced.
+const STAGE_BYTES: usize = 32 << 10;
+
+/// Running statistics of one field.
+#[derive(Debug, Clone, Copy)]
+struct Stat {
+    min: f64,
+    max: f64,
+    sum: f64,
+    count: u64,
+}
+
+impl Default for Stat {
+    fn default() -> Stat {
+        Stat {
+            min: f64::INFINITY,
+            max: f64::NEG_INFINITY,
+            sum: 0.0,
+            count: 0,
+        }
+    }
+}
+
+/// One topic instance's fields (of one format).
 #[derive(Debug, Clone)]
 struct Acc {
     topic: String,
     multi_id: u8,
-    plan: RowPlan,
-    /// Per leaf: name, and whether it is counted.
-    names: Vec<(String, bool)>,
-    min: Vec<f64>,
-    max: Vec<f64>,
-    sum: Vec<f64>,
-    count: Vec<u64>,
+    format: String,
+    stage: RowBatch,
+    stage_rows: usize,
+    /// Per counted field: its name, offset, type and column index.
+    leaves: Vec<(String, usize, Primitive, usize)>,
+    stats: Vec<Stat>,
+}
+
+impl Acc {
+    fn new(topic: &str, multi_id: u8, spec: Arc<ColumnSpec>, stage_rows: usize) -> Acc {
+        let leaves: Vec<(String, usize, Primitive, usize)> = spec
+            .columns()
+            .iter()
+            .enumerate()
+            .filter_map(|(i, c)| match (c.source, c.kind) {
+                (Source::Offset(at), ColumnKind::Value(p))
+                    if c.name != "timestamp" && !matches!(p, Primitive::Bool | Primitive::Char) =>
+                {
+                    Some((c.name.clone(), at, p, i))
+                }
+                _ => None,
+            })
+            .collect();
+        Acc {
+            topic: topic.to_owned(),
+            multi_id,
+            format: spec.format().to_owned(),
+            stage: RowBatch::with_capacity(spec, stage_rows),
+            stage_rows,
+            stats: vec![Stat::default(); leaves.len()],
+            leaves,
+        }
+    }
+}
+
+/// The field statistics of one topic instance taken from its columns, batch by batch.
+#[derive(Debug, Clone)]
+pub(crate) struct ColumnStats(Acc);
+
+impl ColumnStats {
+    /// Statistics of the columns of `spec`, nothing seen.
+    pub(crate) fn new(topic: &str, multi_id: u8, spec: Arc<ColumnSpec>) -> ColumnStats {
+        ColumnStats(Acc::new(topic, multi_id, spec, 0))
+    }
+
+    /// Adds a batch of columns (made by the same spec).
+    pub(crate) fn add(&mut self, columns: &Columns) {
+        let values = columns.values();
+        for ((.., i), stat) in self.0.leaves.iter().zip(&mut self.0.stats) {
+            if let Some(v) = values.get(*i) {
+                reduce_column(v, stat);
+            }
+        }
+    }
 }
 
 /// Every topic instance's field statistics.
@@ -30,81 +104,59 @@ pub(super) struct FieldStats {
 impl FieldStats {
     /// The accumulator of a subscription's rows (one per topic instance and format).
     pub(super) fn bind(&mut self, sub: &Subscription, schema: &Schema) -> Option<usize> {
-        let plan = sub.plan(schema)?;
-        if let Some(k) = self
-            .accs
-            .iter()
-            .position(|a| a.topic == sub.name && a.multi_id == sub.multi_id && a.plan == *plan)
-        {
+        let spec = ColumnSpec::of(schema, sub.format()?)?;
+        if let Some(k) = self.accs.iter().position(|a| {
+            a.topic == sub.name && a.multi_id == sub.multi_id && a.format == spec.format()
+        }) {
             return Some(k);
         }
-        let names: Vec<(String, bool)> = plan
-            .columns(schema)
-            .into_iter()
-            .map(|c| {
-                let counted = c.name != "timestamp"
-                    && !matches!(c.primitive, Primitive::Bool | Primitive::Char);
-                (c.name, counted)
-            })
-            .collect();
-        let n = names.len();
-        self.accs.push(Acc {
-            topic: sub.name.clone(),
-            multi_id: sub.multi_id,
-            plan: plan.clone(),
-            names,
-            min: vec![f64::INFINITY; n],
-            max: vec![f64::NEG_INFINITY; n],
-            sum: vec![0.0; n],
-            count: vec![0; n],
-        });
+        let stage_rows = (STAGE_BYTES / spec.row_len().max(1)).clamp(1, 4096);
+        self.accs.push(Acc::new(
+            &sub.name,
+            sub.multi_id,
+            Arc::new(spec),
+            stage_rows,
+        ));
         Some(self.accs.len() - 1)
+    }
+
+    /// The statistics of columns taken apart ([`ColumnStats`]).
+    pub(crate) fn from_columns(stats: Vec<ColumnStats>) -> FieldStats {
+        FieldStats {
+            accs: stats.into_iter().map(|c| c.0).collect(),
+        }
     }
 
     #[inline]
     pub(super) fn row(&mut self, k: usize, data: &[u8]) {
         let acc = &mut self.accs[k];
-        let Acc {
-            plan,
-            names,
-            min,
-            max,
-            sum,
-            count,
-            ..
-        } = acc;
-        plan.visit_runs(
-            data,
-            &mut Visit {
-                names,
-                min,
-                max,
-                sum,
-                count,
-                at: 0,
-            },
-        );
+        if acc.stage.push(data, 0) && acc.stage.rows() >= acc.stage_rows {
+            acc.reduce();
+        }
     }
 
     /// The statistics of every counted field with a finite value, by topic, instance and
     /// field order.
-    pub(super) fn finish(&self) -> Vec<FieldStat> {
+    pub(super) fn finish(mut self) -> Vec<FieldStat> {
+        for a in &mut self.accs {
+            a.reduce();
+        }
         let mut out = Vec::new();
         let mut accs: Vec<&Acc> = self.accs.iter().collect();
         accs.sort_by(|a, b| (&a.topic, a.multi_id).cmp(&(&b.topic, b.multi_id)));
         for a in accs {
-            for (i, (name, counted)) in a.names.iter().enumerate() {
-                if !counted || a.count[i] == 0 {
+            for ((name, ..), s) in a.leaves.iter().zip(&a.stats) {
+                if s.count == 0 {
                     continue;
                 }
                 // Several formats of one instance (a resubscription): merged by name.
                 if let Some(f) = out.iter_mut().find(|f: &&mut FieldStat| {
                     f.topic == a.topic && f.multi_id == a.multi_id && f.field == *name
                 }) {
-                    let total = f.count + a.count[i];
-                    f.mean = (f.mean * f.count as f64 + a.sum[i]) / total as f64;
-                    f.min = f.min.min(a.min[i]);
-                    f.max = f.max.max(a.max[i]);
+                    let total = f.count + s.count;
+                    f.mean = (f.mean * f.count as f64 + s.sum) / total as f64;
+                    f.min = f.min.min(s.min);
+                    f.max = f.max.max(s.max);
                     f.count = total;
                     continue;
                 }
@@ -112,10 +164,10 @@ impl FieldStats {
                     topic: a.topic.clone(),
                     multi_id: a.multi_id,
                     field: name.clone(),
-                    min: a.min[i],
-                    max: a.max[i],
-                    mean: a.sum[i] / a.count[i] as f64,
-                    count: a.count[i],
+                    min: s.min,
+                    max: s.max,
+                    mean: s.sum / s.count as f64,
+                    count: s.count,
                 });
             }
         }
@@ -123,60 +175,132 @@ impl FieldStats {
     }
 }
 
-struct Visit<'a> {
-    names: &'a [(String, bool)],
-    min: &'a mut [f64],
-    max: &'a mut [f64],
-    sum: &'a mut [f64],
-    count: &'a mut [u64],
-    at: usize,
-}
-
-impl Visit<'_> {
-    #[inline]
-    fn take(&mut self, values: impl Iterator<Item = f64>) {
-        for v in values {
-            let i = self.at;
-            self.at += 1;
-            if self.names[i].1 && v.is_finite() {
-                self.min[i] = self.min[i].min(v);
-                self.max[i] = self.max[i].max(v);
-                self.sum[i] += v;
-                self.count[i] += 1;
+impl Acc {
+    /// Folds the staged rows into the statistics.
+    fn reduce(&mut self) {
+        let stride = self.stage.spec().row_len();
+        let bytes = self.stage.bytes();
+        if stride > 0 && !bytes.is_empty() {
+            for ((_, at, p, _), stat) in self.leaves.iter().zip(&mut self.stats) {
+                reduce(bytes, stride, *at, *p, stat);
             }
         }
+        self.stage.clear();
     }
 }
 
-macro_rules! visit {
-    ($($name:ident: $arr:ty => $conv:expr),* $(,)?) => {
-        impl<'r> VisitLeaves<'r> for Visit<'_> {
-            $(
-                #[inline]
-                #[allow(clippy::cast_precision_loss)]
-                fn $name(&mut self, v: &'r [$arr]) {
-                    self.take(v.iter().map($conv));
+/// Folds field `p` at `at` of every row of `bytes` (`stride` bytes a row) into `stat`:
+/// four rows at a time into four sets of accumulators (a sum's additions do not wait for
+/// each other), a value that is not finite selected away rather than branched around.
+#[allow(clippy::cast_precision_loss)]
+fn reduce(bytes: &[u8], stride: usize, at: usize, p: Primitive, stat: &mut Stat) {
+    macro_rules! fold {
+        ($ty:ty) => {{
+            const SIZE: usize = size_of::<$ty>();
+            let value = |r: &[u8]| -> f64 {
+                let (v, _) = r[at..].split_first_chunk::<SIZE>().expect("in the row");
+                <$ty>::from_le_bytes(*v) as f64
+            };
+            let mut lanes = [Lane::new(stat.min, stat.max); 4];
+            let mut quads = bytes.chunks_exact(stride * 4);
+            for q in &mut quads {
+                for (lane, r) in lanes.iter_mut().zip(q.chunks_exact(stride)) {
+                    lane.take(value(r));
                 }
-            )*
-            fn bool(&mut self, v: &'r [u8]) {
-                self.at += v.len();
             }
-            fn char(&mut self, v: &'r [u8]) {
-                self.at += v.len();
+            for r in quads.remainder().chunks_exact(stride) {
+                lanes[0].take(value(r));
             }
-        }
-    };
+            for l in lanes {
+                stat.min = stat.min.min(l.min);
+                stat.max = stat.max.max(l.max);
+                stat.sum += l.sum;
+                stat.count += l.count;
+            }
+        }};
+    }
+    match p {
+        Primitive::Int8 => fold!(i8),
+        Primitive::UInt8 => fold!(u8),
+        Primitive::Int16 => fold!(i16),
+        Primitive::UInt16 => fold!(u16),
+        Primitive::Int32 => fold!(i32),
+        Primitive::UInt32 => fold!(u32),
+        Primitive::Int64 => fold!(i64),
+        Primitive::UInt64 => fold!(u64),
+        Primitive::Float => fold!(f32),
+        Primitive::Double => fold!(f64),
+        Primitive::Bool | Primitive::Char => {}
+    }
 }
 
-visit! {
-    int8: u8 => |b: &u8| f64::from(*b as i8),
-    uint8: u8 => |b: &u8| f64::from(*b),
-    int16: [u8; 2] => |b: &[u8; 2]| f64::from(i16::from_le_bytes(*b)),
-    uint16: [u8; 2] => |b: &[u8; 2]| f64::from(u16::from_le_bytes(*b)),
-    int32: [u8; 4] => |b: &[u8; 4]| f64::from(i32::from_le_bytes(*b)),
-    uint32: [u8; 4] => |b: &[u8; 4]| f64::from(u32::from_le_bytes(*b)),
-    int64: [u8; 8] => |b: &[u8; 8]| i64::from_le_bytes(*b) as f64,
-    uint64: [u8; 8] => |b: &[u8; 8]| u64::from_le_bytes(*b) as f64,
-    float: [u8; 4] => |b: &[u8; 4]| f64::from(f32::from_le_bytes(*b)),
-    double: [u8; 8] => |b: &[u8; 8]| f64::from_le_bytes(*b),
+/// Folds the values of one column into `stat`, as [`reduce`] does rows.
+#[allow(clippy::cast_precision_loss)]
+fn reduce_column(values: &ColumnValues, stat: &mut Stat) {
+    fn fold<T: Copy>(values: &[T], to_f64: impl Fn(T) -> f64, stat: &mut Stat) {
+        let mut lanes = [Lane::new(stat.min, stat.max); 4];
+        let mut quads = values.chunks_exact(4);
+        for q in &mut quads {
+            for (lane, &v) in lanes.iter_mut().zip(q) {
+                lane.take(to_f64(v));
+            }
+        }
+        for &v in quads.remainder() {
+            lanes[0].take(to_f64(v));
+        }
+        for l in lanes {
+            stat.min = stat.min.min(l.min);
+            stat.max = stat.max.max(l.max);
+            stat.sum += l.sum;
+            stat.count += l.count;
+        }
+    }
+    match values {
+        ColumnValues::Int8(v) => fold(v, f64::from, stat),
+        ColumnValues::UInt8(v) => fold(v, f64::from, stat),
+        ColumnValues::Int16(v) => fold(v, f64::from, stat),
+        ColumnValues::UInt16(v) => fold(v, f64::from, stat),
+        ColumnValues::Int32(v) => fold(v, f64::from, stat),
+        ColumnValues::UInt32(v) => fold(v, f64::from, stat),
+        ColumnValues::Int64(v) => fold(v, |x| x as f64, stat),
+        ColumnValues::UInt64(v) => fold(v, |x| x as f64, stat),
+        ColumnValues::Float(v) => fold(v, f64::from, stat),
+        ColumnValues::Double(v) => fold(v, |x| x, stat),
+        ColumnValues::Bool(_) | ColumnValues::Char(_) | ColumnValues::Text(_) => {}
+    }
+}
+
+/// One set of accumulators.
+#[derive(Clone, Copy)]
+struct Lane {
+    min: f64,
+    max: f64,
+    sum: f64,
+    count: u64,
+}
+
+impl Lane {
+    fn new(min: f64, max: f64) -> Lane {
+        Lane {
+            min,
+            max,
+            sum: 0.0,
+            count: 0,
+        }
+    }
+
+    #[inline(always)]
+    fn take(&mut self, v: f64) {
+        let finite = v.is_finite();
+        // NaN compares false both ways: it moves neither bound.
+        let bound = if finite { v } else { f64::NAN };
+        if bound < self.min {
+            self.min = bound;
+        }
+        if bound > self.max {
+            self.max = bound;
+        }
+        self.sum += if finite { v } else { 0.0 };
+        self.count += u64::from(finite);
+    }
 }

@@ -30,6 +30,8 @@
 
 pub mod diagnostics;
 mod fields;
+#[cfg(feature = "parquet")]
+pub(crate) use fields::ColumnStats;
 mod modes;
 mod motion;
 mod params;
@@ -39,6 +41,7 @@ mod state;
 mod summary;
 
 use std::io::Read;
+use std::num::NonZero;
 
 use crate::read::{Log, Metadata, Row, Subscription};
 use crate::{Event, ReadError, StreamReader};
@@ -357,11 +360,16 @@ pub struct Analyzer {
     diagnostics: diagnostics::Diagnostics,
     spectral: motion::Spectral,
     /// Per subscription: its topics' fields, bound at its first row.
-    routes: Vec<Option<Route>>,
+    routes: Vec<Option<Box<Route>>>,
+    /// Per subscription: 0 until its route is made, then 1 + whether any consumer takes
+    /// its rows (one byte to look at for the rows no consumer wants).
+    wanted: Vec<u8>,
     /// Bytes the reader skipped as damaged.
     damaged_bytes: u64,
     /// Whether the initial parameters were read (at the first row).
     started: bool,
+    /// The consumers it runs.
+    parts: Parts,
     /// The last row's time.
     last_timestamp: u64,
 }
@@ -382,11 +390,61 @@ struct Route {
     fields: Option<usize>,
 }
 
+/// Which consumers an analyzer runs: a pass over a whole-file log is split across threads,
+/// each running some, their analyses merged ([`Analysis::of_log`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Parts {
+    /// Modes, motion, sensors, diagnostics, parameters.
+    core: bool,
+    /// Step responses and spectra.
+    spectral: bool,
+    /// Per-field statistics.
+    fields: bool,
+}
+
+impl Default for Parts {
+    fn default() -> Parts {
+        Parts {
+            core: true,
+            spectral: true,
+            fields: true,
+        }
+    }
+}
+
 impl Analyzer {
     /// An analyzer that has seen nothing.
     #[must_use]
     pub fn new() -> Analyzer {
         Analyzer::default()
+    }
+
+    /// An analyzer without the per-field statistics, which its caller takes from columns it
+    /// makes anyway ([`Analyzer::finish_with_columns`]).
+    pub(crate) fn without_field_stats() -> Analyzer {
+        Analyzer::of_parts(Parts {
+            fields: false,
+            ..Parts::default()
+        })
+    }
+
+    /// [`Analyzer::finish`], the per-field statistics those of `columns`.
+    pub(crate) fn finish_with_columns(
+        mut self,
+        meta: &Metadata,
+        columns: Vec<fields::ColumnStats>,
+    ) -> Analysis {
+        self.parts.fields = true;
+        self.fields = fields::FieldStats::from_columns(columns);
+        self.finish(meta)
+    }
+
+    /// An analyzer running only `parts`.
+    fn of_parts(parts: Parts) -> Analyzer {
+        Analyzer {
+            parts,
+            ..Analyzer::default()
+        }
     }
 
     /// Takes one event of a pass over a log, in file order.
@@ -411,29 +469,38 @@ impl Analyzer {
             self.diagnostics.start(meta);
         }
         let i = row.subscription.index();
-        if self.routes.len() <= i {
-            self.routes.resize_with(i + 1, || None);
-        }
-        if self.routes[i].is_none() {
-            self.routes[i] = Some(self.route(row.subscription, row.schema()));
-        }
-        let route = self.routes[i].as_ref().expect("just made");
-        let t = row.timestamp;
         // The log's end: its last row (a topic whose timestamp means something else,
         // as `mission`'s, would stretch a maximum).
-        self.last_timestamp = t;
+        self.last_timestamp = row.timestamp;
+        match self.wanted.get(i) {
+            Some(1) => return,
+            Some(2) => {}
+            _ => {
+                if self.routes.len() <= i {
+                    self.routes.resize_with(i + 1, || None);
+                    self.wanted.resize(i + 1, 0);
+                }
+                let route = self.route(row.subscription, row.schema());
+                let any = route.state.is_some()
+                    || route.fields.is_some()
+                    || route.motion.is_some()
+                    || route.sensors.is_some()
+                    || route.diagnostics.is_some()
+                    || route.spectral.is_some();
+                self.wanted[i] = 1 + u8::from(any);
+                self.routes[i] = Some(Box::new(route));
+                if !any {
+                    return;
+                }
+            }
+        }
+        let route = self.routes[i].as_deref().expect("made with its byte");
+        let t = row.timestamp;
         if let Some(f) = &route.state {
             self.state.row(f, row.data, t, &mut self.modes);
         }
         if let Some(k) = route.fields {
             self.fields.row(k, row.data);
-        }
-        if route.motion.is_none()
-            && route.sensors.is_none()
-            && route.diagnostics.is_none()
-            && route.spectral.is_none()
-        {
-            return;
         }
         if let Some(f) = &route.motion {
             self.motion.row(f, row.data, &self.state);
@@ -464,13 +531,32 @@ impl Analyzer {
             };
         };
         let name = sub.name.as_str();
+        let Parts {
+            core,
+            spectral,
+            fields,
+        } = self.parts;
         Route {
-            state: state::Fields::bind(name, &index),
-            motion: motion::Fields::bind(name, &index),
-            sensors: sensors::Fields::bind(name, sub.multi_id, &index),
-            diagnostics: diagnostics::Fields::bind(name, sub.multi_id, &index),
-            spectral: motion::SpectralFields::bind(name, &index),
-            fields: self.fields.bind(sub, schema),
+            state: if core || spectral {
+                state::Fields::bind(name, &index)
+            } else {
+                None
+            },
+            motion: core.then(|| motion::Fields::bind(name, &index)).flatten(),
+            sensors: core
+                .then(|| sensors::Fields::bind(name, sub.multi_id, &index))
+                .flatten(),
+            diagnostics: core
+                .then(|| diagnostics::Fields::bind(name, sub.multi_id, &index))
+                .flatten(),
+            spectral: spectral
+                .then(|| motion::SpectralFields::bind(name, &index))
+                .flatten(),
+            fields: if fields {
+                self.fields.bind(sub, schema)
+            } else {
+                None
+            },
         }
     }
 
@@ -478,39 +564,34 @@ impl Analyzer {
     pub fn finish(self, meta: &Metadata) -> Analysis {
         let end = self.last_timestamp;
         let mut missing = Vec::new();
-        let (flight_modes, vtol_states, armed, flights) =
-            self.modes.finish(end, &self.state, &mut missing);
-        let stats = self.motion.finish(&mut missing);
-        let (battery, gps_quality, vibration, gps_track) =
-            self.sensors.finish(meta, &self.modes, &mut missing);
-        let diagnostics = self.diagnostics.finish(end);
-        let (step_response, spectra) = self.spectral.finish(&mut missing);
-        if self.damaged_bytes > 0 {
-            missing.push(Missing {
-                fact: "every fact".to_owned(),
-                reason: format!(
-                    "{} damaged bytes of the log were skipped: the rows in them are not counted",
-                    self.damaged_bytes
-                ),
-            });
+        let mut a = Analysis::default();
+        if self.parts.core {
+            (a.flight_modes, a.vtol_states, a.armed, a.flights) =
+                self.modes.finish(end, &self.state, &mut missing);
+            a.stats = self.motion.finish(&mut missing);
+            (a.battery, a.gps_quality, a.vibration, a.gps_track) =
+                self.sensors.finish(meta, &self.modes, &mut missing);
+            a.diagnostics = self.diagnostics.finish(end);
+            a.non_default_params = params::non_default(meta, &mut missing);
+            if self.damaged_bytes > 0 {
+                missing.push(Missing {
+                    fact: "every fact".to_owned(),
+                    reason: format!(
+                        "{} damaged bytes of the log were skipped: the rows in them are not \
+                         counted",
+                        self.damaged_bytes
+                    ),
+                });
+            }
         }
-        Analysis {
-            flight_modes,
-            vtol_states,
-            armed,
-            flights,
-            stats,
-            battery,
-            gps_quality,
-            vibration,
-            non_default_params: params::non_default(meta, &mut missing),
-            gps_track,
-            field_stats: self.fields.finish(),
-            diagnostics,
-            step_response,
-            spectra,
-            missing,
+        if self.parts.spectral {
+            (a.step_response, a.spectra) = self.spectral.finish(&mut missing);
         }
+        if self.parts.fields {
+            a.field_stats = self.fields.finish();
+        }
+        a.missing = missing;
+        a
     }
 }
 
@@ -527,13 +608,46 @@ impl Analysis {
         Ok(analyzer.finish(reader.metadata()))
     }
 
-    /// The analysis of a whole-file log.
+    /// The analysis of a whole-file log: the same as [`Analysis::of_reader`] gives. On a
+    /// machine of more than one core, the per-field statistics are taken on another
+    /// thread, in a pass of their own.
     pub fn of_log(log: &Log<'_>) -> Analysis {
         let meta = log.metadata();
-        let mut analyzer = Analyzer::new();
-        for row in log.data() {
-            analyzer.row(meta, &row);
-        }
+        let pass = |parts: Parts, rows: std::ops::Range<usize>| {
+            let mut analyzer = Analyzer::of_parts(parts);
+            log.data_range(rows)
+                .for_each(|row| analyzer.row(meta, &row));
+            analyzer
+        };
+        let n = log.row_count();
+        let mut analyzer = if std::thread::available_parallelism().map_or(1, NonZero::get) < 2 {
+            pass(Parts::default(), 0..n)
+        } else {
+            let fields = Parts {
+                core: false,
+                spectral: false,
+                fields: true,
+            };
+            let (mut analyzer, fields) = std::thread::scope(|s| {
+                let fields = s.spawn(|| pass(fields, 0..n));
+                let rest = pass(
+                    Parts {
+                        fields: false,
+                        ..Parts::default()
+                    },
+                    0..n,
+                );
+                (
+                    rest,
+                    fields
+                        .join()
+                        .expect("the field statistics pass does not panic"),
+                )
+            });
+            analyzer.parts.fields = true;
+            analyzer.fields = fields.fields;
+            analyzer
+        };
         for d in log.diagnostics() {
             if let Some(r) = d.damaged_range() {
                 analyzer.damaged_bytes += r.end - r.start;
@@ -544,4 +658,4 @@ impl Analysis {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

@@ -74,9 +74,11 @@ struct Acc {
     max_down: Option<f64>,
     speed_sum: f64,
     speed_n: u64,
-    max_tilt: Option<f64>,
-    max_rate: Option<f64>,
-    max_rate_other: Option<f64>,
+    /// The smallest cosine of the tilt (the largest tilt, without an `acos` a row).
+    min_cos_tilt: Option<f64>,
+    /// The largest squared rotation rates, (rad/s)².
+    max_rate2: Option<f64>,
+    max_rate2_other: Option<f64>,
 }
 
 fn max(a: &mut Option<f64>, v: f64) {
@@ -101,8 +103,10 @@ impl Acc {
             self.z = Some(self.z.map_or((z, z), |(lo, hi)| (lo.min(z), hi.max(z))));
         }
         if let Some(v) = vel {
-            let h = v[0].hypot(v[1]);
-            let s = h.hypot(v[2]);
+            // Speeds of vehicles: no overflow for `hypot` to guard against.
+            let h2 = v[0] * v[0] + v[1] * v[1];
+            let h = h2.sqrt();
+            let s = (h2 + v[2] * v[2]).sqrt();
             max(&mut self.max_speed, s);
             max(&mut self.max_h, h);
             max(&mut self.max_up, if v[2] < 0.0 { -v[2] } else { 0.0 });
@@ -121,8 +125,11 @@ impl Acc {
             max_speed_up_m_s: self.max_up,
             max_speed_down_m_s: self.max_down,
             avg_speed_m_s: (self.speed_n > 0).then(|| self.speed_sum / self.speed_n as f64),
-            max_tilt_deg: self.max_tilt,
-            max_rotation_speed_deg_s: self.max_rate.or(self.max_rate_other),
+            max_tilt_deg: self.min_cos_tilt.map(|c| c.acos().to_degrees()),
+            max_rotation_speed_deg_s: self
+                .max_rate2
+                .or(self.max_rate2_other)
+                .map(|r2| r2.sqrt().to_degrees()),
         }
     }
 }
@@ -138,6 +145,7 @@ pub(super) struct MotionStats {
 }
 
 /// Finite values of three leaves.
+#[inline]
 fn read3(data: &[u8], leaves: &[Leaf; 3]) -> Option<[f64; 3]> {
     let v = [
         leaves[0].f64(data)?,
@@ -168,26 +176,23 @@ impl MotionStats {
                 let (Some(q1), Some(q2)) = (q[1].f64(data), q[2].f64(data)) else {
                     return;
                 };
-                // The angle between the body's z axis and the vertical.
-                let tilt = (1.0 - 2.0 * (q1 * q1 + q2 * q2))
-                    .clamp(-1.0, 1.0)
-                    .acos()
-                    .to_degrees();
-                for a in accs.iter_mut() {
-                    max(&mut a.max_tilt, tilt);
+                // The cosine of the angle between the body's z axis and the vertical.
+                let cos = (1.0 - 2.0 * (q1 * q1 + q2 * q2)).clamp(-1.0, 1.0);
+                if cos.is_finite() {
+                    for a in accs.iter_mut() {
+                        a.min_cos_tilt = Some(a.min_cos_tilt.map_or(cos, |c| c.min(cos)));
+                    }
                 }
             }
             Fields::Rates { xyz, preferred } => {
                 self.seen_rates = true;
                 if let Some(r) = read3(data, xyz) {
-                    let rate = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2])
-                        .sqrt()
-                        .to_degrees();
+                    let rate2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
                     for a in accs.iter_mut() {
                         if *preferred {
-                            max(&mut a.max_rate, rate);
+                            max(&mut a.max_rate2, rate2);
                         } else {
-                            max(&mut a.max_rate_other, rate);
+                            max(&mut a.max_rate2_other, rate2);
                         }
                     }
                 }
@@ -298,28 +303,41 @@ impl Spectral {
                 }
             }
             SpectralFields::Gyro { xyz, raw } => {
+                // Steps from the controller's rates, else the raw gyro's; spectra from the
+                // raw gyro, else the controller's rates: a fallback is fed only until its
+                // preferred source has a result (from then on it would not be used).
+                let (feed_steps, feed_welch) = if *raw {
+                    (!self.steps.iter().all(StepResponse::has_response), true)
+                } else {
+                    (true, !self.gyro_raw.iter().all(Welch::has_estimate))
+                };
+                let (steps, welch) = if *raw {
+                    (&mut self.steps_raw, &mut self.gyro_raw)
+                } else {
+                    (&mut self.steps, &mut self.gyro)
+                };
                 for (k, leaf) in xyz.iter().enumerate() {
                     if let Some(v) = leaf.f64(data) {
-                        let (steps, welch) = if *raw {
-                            (&mut self.steps_raw, &mut self.gyro_raw)
-                        } else {
-                            (&mut self.steps, &mut self.gyro)
-                        };
-                        if self.seen_setpoint {
+                        if feed_steps && self.seen_setpoint {
                             steps[k].gyro(t, v.to_degrees(), keep);
                         }
-                        welch[k].push(t, v, keep);
+                        if feed_welch {
+                            welch[k].push(t, v, keep);
+                        }
                     }
                 }
             }
             SpectralFields::Accel { xyz, raw } => {
+                if !*raw && self.accel_raw.iter().all(Welch::has_estimate) {
+                    return;
+                }
+                let welch = if *raw {
+                    &mut self.accel_raw
+                } else {
+                    &mut self.accel
+                };
                 for (k, leaf) in xyz.iter().enumerate() {
                     if let Some(v) = leaf.f64(data) {
-                        let welch = if *raw {
-                            &mut self.accel_raw
-                        } else {
-                            &mut self.accel
-                        };
                         welch[k].push(t, v, keep);
                     }
                 }
@@ -351,7 +369,7 @@ impl Spectral {
         let mut responses = Vec::new();
         let names = ["roll", "pitch", "yaw"];
         for (k, (ctrl, raw)) in self.steps.into_iter().zip(self.steps_raw).enumerate() {
-            // The controller's input when the log has it, the raw gyro otherwise.
+            // The controller's input when it gives a response, the raw gyro otherwise.
             if let Some(r) = ctrl.finish().or_else(|| raw.finish()) {
                 responses.push(AxisResponse {
                     axis: names[k].to_owned(),

@@ -103,13 +103,13 @@ struct InputRc {
 
 /// Faults to inject into the flight.
 #[derive(Default, Clone, Copy)]
-struct Faults {
-    brownout: bool,
-    ekf: bool,
-    gps: bool,
-    motor: bool,
-    rc: bool,
-    steps: bool,
+pub(crate) struct Faults {
+    pub(crate) brownout: bool,
+    pub(crate) ekf: bool,
+    pub(crate) gps: bool,
+    pub(crate) motor: bool,
+    pub(crate) rc: bool,
+    pub(crate) steps: bool,
 }
 
 const S: u64 = 1_000_000;
@@ -118,7 +118,7 @@ const S: u64 = 1_000_000;
 /// 10 m radius at 2 m/s and 5 m up to 50 s, landed, disarmed at 55 s (the outputs drop to
 /// their disarmed value 50 ms before the disarm is logged, as PX4 logs it). Position mode
 /// to 30 s, Mission after. A 4S battery from 16.4 V down to 15.2 V at 10 A while flying.
-fn flight(faults: Faults) -> Vec<u8> {
+pub(crate) fn flight(faults: Faults) -> Vec<u8> {
     let mut w = Writer::new(
         Vec::new(),
         WriterOptions {

@@ -60,6 +60,11 @@ impl Leaf {
     #[inline]
     pub(crate) fn f64(self, row: &[u8]) -> Option<f64> {
         match self {
+            // The common case, without the dispatch on the type.
+            Leaf::Value(at, Primitive::Float) => {
+                let (v, _) = row.get(at..)?.split_first_chunk::<4>()?;
+                Some(f64::from(f32::from_le_bytes(*v)))
+            }
             Leaf::Value(at, p) => {
                 Scalar::decode(p, row.get(at..at + p.size())?).map(Scalar::as_f64)
             }

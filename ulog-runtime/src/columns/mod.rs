@@ -392,6 +392,11 @@ impl Columns {
         self.defs().iter().zip(&self.values)
     }
 
+    /// The values, in column order.
+    pub fn values(&self) -> &[ColumnValues] {
+        &self.values
+    }
+
     /// The values, in column order, taken out.
     pub fn into_values(self) -> Vec<ColumnValues> {
         self.values
@@ -487,6 +492,8 @@ impl ColumnBuilder {
 #[derive(Debug, Clone)]
 pub struct RowBatch {
     spec: Arc<ColumnSpec>,
+    /// The spec's `row_len`, at hand.
+    row_len: usize,
     bytes: Vec<u8>,
     timestamps: Vec<u64>,
 }
@@ -495,6 +502,7 @@ impl RowBatch {
     /// An empty batch with room for `rows` rows.
     pub fn with_capacity(spec: Arc<ColumnSpec>, rows: usize) -> RowBatch {
         RowBatch {
+            row_len: spec.row_len,
             bytes: Vec::with_capacity(rows * spec.row_len),
             timestamps: Vec::with_capacity(rows),
             spec,
@@ -505,7 +513,7 @@ impl RowBatch {
     /// shorter than the columns need.
     #[inline]
     pub fn push(&mut self, data: &[u8], timestamp: u64) -> bool {
-        let Some(data) = data.get(..self.spec.row_len) else {
+        let Some(data) = data.get(..self.row_len) else {
             return false;
         };
         self.bytes.extend_from_slice(data);
@@ -526,6 +534,17 @@ impl RowBatch {
     /// The spec of the rows.
     pub fn spec(&self) -> &Arc<ColumnSpec> {
         &self.spec
+    }
+
+    /// The rows' bytes, [`ColumnSpec::row_len`] a row.
+    pub(crate) fn bytes(&self) -> &[u8] {
+        &self.bytes
+    }
+
+    /// Leaves the batch empty (its room kept).
+    pub(crate) fn clear(&mut self) {
+        self.bytes.clear();
+        self.timestamps.clear();
     }
 
     /// The rows' columns, in the spec's order.

@@ -358,6 +358,43 @@ fn parquet_options_select_topics_and_time_and_say_what_they_wrote() {
         topics,
         [("battery", 0, 10), ("battery", 1, 10), ("gps", 0, 10)]
     );
+    // The analysis is of the whole log, not of what the options kept: here the mean of
+    // battery #1's voltage over its 10 rows (0, -1, ... -9), and gps's altitude.
+    let stats: Vec<(&str, u64, &str, f64)> = meta["analysis"]["field_stats"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| {
+            (
+                f["topic"].as_str().unwrap(),
+                f["multi_id"].as_u64().unwrap(),
+                f["field"].as_str().unwrap(),
+                f["mean"].as_f64().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        stats,
+        [
+            ("battery", 0, "voltage_v", 4.5),
+            ("battery", 1, "voltage_v", -4.5),
+            ("gps", 0, "alt", 104.5)
+        ]
+    );
+    let bare = dir.join("bare");
+    stdout(&[
+        "parquet",
+        log.to_str().unwrap(),
+        "-o",
+        bare.to_str().unwrap(),
+        "--no-analysis",
+    ]);
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(bare.join("small/metadata.json")).unwrap()).unwrap();
+    assert!(
+        meta.get("analysis").is_none(),
+        "--no-analysis leaves it out"
+    );
     // A topic the log lacks is an error before anything is written, naming the closest.
     let fresh = dir.join("fresh");
     let only = |logs: &[&str], topic: &str| {

@@ -66,6 +66,9 @@ impl Welch {
 
     fn take(&mut self, t: u64, x: f64, keep: bool) {
         let state = self.state.as_mut().expect("made");
+        if state.segments >= MAX_SEGMENTS {
+            return;
+        }
         let gap = self.last.is_some_and(|l| t <= l || t - l > 3 * state.dt_us);
         if !keep || !x.is_finite() || gap {
             state.run.clear();
@@ -74,6 +77,11 @@ impl Welch {
         if keep && x.is_finite() {
             state.push(x);
         }
+    }
+
+    /// Whether an estimate is made (a segment seen): [`Welch::finish`] gives one.
+    pub(crate) fn has_estimate(&self) -> bool {
+        self.state.as_ref().is_some_and(|s| s.segments > 0)
     }
 
     /// The estimate, if at least one segment was seen.

@@ -115,6 +115,13 @@ impl StepResponse {
         }
     }
 
+    /// Whether enough windows counted: [`StepResponse::finish`] gives a response.
+    pub(crate) fn has_response(&self) -> bool {
+        self.state
+            .as_ref()
+            .is_some_and(|s| s.low.windows >= MIN_WINDOWS || s.high.windows >= MIN_WINDOWS)
+    }
+
     /// The response, if enough windows counted.
     pub(crate) fn finish(self) -> Option<Response> {
         let s = self.state?;

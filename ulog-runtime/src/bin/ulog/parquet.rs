@@ -11,7 +11,8 @@ use ulog_runtime::columns::parquet::{Converter, Layout, ParquetOptions};
 
 use crate::Failure;
 
-/// `ulog parquet FILE... -o DIR [-m a,b] [--start S --end S] [--layout hive] [-j N]`.
+/// `ulog parquet FILE... -o DIR [-m a,b] [--start S --end S] [--layout hive] [-j N]
+/// [--no-analysis] [--buffer-mb N]`.
 #[derive(clap::Args)]
 pub(crate) struct Args {
     /// The logs.
@@ -39,6 +40,13 @@ pub(crate) struct Args {
     /// ZSTD compression level.
     #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     zstd_level: i32,
+    /// Leave the flight analysis out of metadata.json.
+    #[arg(long)]
+    no_analysis: bool,
+    /// Memory for rows waiting for their row group, MiB per log (more: fewer, larger row
+    /// groups).
+    #[arg(long, default_value_t = 16)]
+    buffer_mb: usize,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -56,6 +64,8 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
             LayoutArg::PerLog => Layout::PerLog,
             LayoutArg::Hive => Layout::Hive,
         },
+        analysis: !args.no_analysis,
+        buffer_bytes: args.buffer_mb.max(1) << 20,
         ..ParquetOptions::default()
     };
     // Refused here rather than once per log.

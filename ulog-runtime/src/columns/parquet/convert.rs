@@ -1,7 +1,8 @@
-//! Whole logs to Parquet in one streaming pass each: rows go to a [`Table`] per topic
-//! instance as they come, row groups are written when the buffers of all tables together
-//! pass the budget (the largest first), and the log's identity and `metadata.json` are
-//! written when the pass has hashed the whole file.
+//! Whole logs to Parquet in one streaming pass each: rows are collected per topic instance
+//! as they come and handed in batches to the [`Encoder`], which makes them columns and row
+//! groups beside the read (on other cores) while the pass feeds the flight analysis; the
+//! file is hashed on a thread of its own (or as it is read, for a reader); the tables'
+//! footers and `metadata.json` are written once the digest is known.
 
 use std::fs::File;
 use std::io::{self, Read};
@@ -12,9 +13,11 @@ use parquet::errors::ParquetError;
 use serde::Serialize;
 use sha2::Digest;
 
+use super::encode::{Encoder, Output, TableWork};
 use super::fleet::TablePlace;
 use super::{Admission, AdmitRow, GpsClock, LogIdentity, ParquetOptions, Table, TableWritten};
-use crate::columns::ColumnSpec;
+use crate::analysis::{Analysis, Analyzer, ColumnStats};
+use crate::columns::{ColumnSpec, RowBatch};
 use crate::document::{Collected, KEPT_DIAGNOSTICS, LogFacts};
 use crate::file_names::FileNames;
 use crate::read::{Dropout, LoggedMessage, ParameterChange, Row, Skipped, TopicSummary};
@@ -152,20 +155,34 @@ impl Converter {
     /// `<stem>~2`... that holds this same log (same SHA-256 in its `metadata.json`: replaced)
     /// or nothing, never another log's ([`Conversion::log_dir`], [`Conversion::notes`]).
     pub fn convert_file(&self, path: &Path) -> Result<Conversion, ConvertError> {
-        self.convert_as(path, &crate::file_names::log_stem(path))
+        self.convert_as(path, &crate::file_names::log_stem(path), self.encoders(1))
     }
 
-    /// [`Converter::convert_file`], its outputs named by `stem`.
-    pub(super) fn convert_as(&self, path: &Path, stem: &str) -> Result<Conversion, ConvertError> {
+    /// [`Converter::convert_file`], its outputs named by `stem`, with `encoders` threads
+    /// beside the reading one.
+    pub(super) fn convert_as(
+        &self,
+        path: &Path,
+        stem: &str,
+        encoders: usize,
+    ) -> Result<Conversion, ConvertError> {
         let name = path
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_else(|| path.display().to_string());
-        let file = File::open(path).map_err(|e| ConvertError::Read {
+        let read_error = |e| ConvertError::Read {
             log: path.display().to_string(),
             source: ReadError::Io(e),
-        })?;
-        self.convert_reader_as(file, &name, &path.display().to_string(), stem)
+        };
+        let file = File::open(path).map_err(read_error)?;
+        let source = Source {
+            file_name: &name,
+            label: &path.display().to_string(),
+            stem,
+            // With threads to spare, the file is hashed on one of its own.
+            hash_file: (encoders > 0).then_some(path),
+        };
+        self.convert_source(file, &source, encoders)
     }
 
     /// Converts a log read from `input`, named `file_name` (its outputs by its stem, as
@@ -176,52 +193,150 @@ impl Converter {
         file_name: &str,
     ) -> Result<Conversion, ConvertError> {
         let stem = crate::file_names::log_stem(file_name.as_ref());
-        self.convert_reader_as(input, file_name, file_name, &stem)
+        let source = Source {
+            file_name,
+            label: file_name,
+            stem: &stem,
+            hash_file: None,
+        };
+        self.convert_source(input, &source, self.encoders(1))
     }
 
-    /// Converts a log named `file_name` (`label` in errors), its outputs named by `stem`.
-    fn convert_reader_as(
+    /// Encoder threads for one log of `logs` converted at once: the option's, or every
+    /// core but the reading one's for a single log, none for several.
+    pub(super) fn encoders(&self, logs: usize) -> usize {
+        self.options.encoders.unwrap_or_else(|| {
+            if logs > 1 {
+                0
+            } else {
+                std::thread::available_parallelism().map_or(1, std::num::NonZero::get) - 1
+            }
+        })
+    }
+
+    /// Converts the log read from `input`: the pass, the encoders beside it, the digest;
+    /// then the tables closed and `metadata.json` written.
+    fn convert_source(
         &self,
         input: impl Read,
-        file_name: &str,
-        label: &str,
-        stem: &str,
+        source: &Source<'_>,
+        encoders: usize,
     ) -> Result<Conversion, ConvertError> {
-        let read_error = |source| ConvertError::Read {
-            log: label.to_owned(),
-            source,
+        let encoder = if encoders == 0 {
+            Encoder::inline(self.options.buffer_bytes)
+        } else {
+            Encoder::pool(self.options.buffer_bytes, encoders)
+        };
+        let label = source.label;
+        let (pass, digest) = std::thread::scope(|s| {
+            for _ in 0..encoder.threads() {
+                s.spawn(|| encoder.work());
+            }
+            let hashing = source.hash_file.map(|p| s.spawn(move || hash_file(p)));
+            let pass = self.pass(input, source, &encoder, hashing.is_none());
+            // The workers stop once the batches are encoded, failed or not.
+            encoder.finish();
+            let digest = hashing.map(|h| h.join().expect("hashing does not panic"));
+            (pass, digest)
+        });
+        let (pass, meta, inline_digest) = pass?;
+        let tables = encoder
+            .take_tables()
+            .map_err(|(t, e)| pass.table_error(t, e))?;
+        let (digest, bytes) = match digest {
+            Some(d) => d.map_err(|e| ConvertError::Read {
+                log: label.to_owned(),
+                source: ReadError::Io(e),
+            })?,
+            None => inline_digest.expect("hashed as read"),
+        };
+        let identity = LogIdentity::new(&meta, source.file_name, &digest, pass.clock.start());
+        pass.finish(tables, &identity, &meta, bytes, encoders + 1)
+    }
+
+    /// The reading pass: every event to the pass, batches to the encoder; the metadata,
+    /// and the digest and length when hashed as read.
+    #[allow(clippy::type_complexity)]
+    fn pass<'c>(
+        &'c self,
+        input: impl Read,
+        source: &Source<'_>,
+        encoder: &'c Encoder<Reopening>,
+        hash: bool,
+    ) -> Result<(Pass<'c>, crate::read::Metadata, Option<(Vec<u8>, u64)>), ConvertError> {
+        let read_error = |e| ConvertError::Read {
+            log: source.label.to_owned(),
+            source: e,
         };
         let mut input = Hashing {
             inner: input,
-            sha: sha2::Sha256::new(),
+            sha: hash.then(sha2::Sha256::new),
             read: 0,
             unreported: 0,
             progress: self.progress.as_deref(),
         };
         let mut reader = StreamReader::new(&mut input).map_err(read_error)?;
-        let mut pass = Pass::new(self, stem);
+        let mut pass = Pass::new(self, source.stem, encoder);
         pass.clock = GpsClock::new(reader.metadata().header().start_timestamp);
-        reader
-            .for_each_event(|event| pass.event(&event))
-            .map_err(read_error)?;
+        let result = reader.for_each_message(|meta, event, _| {
+            pass.event(meta, &event);
+            Ok::<(), ReadError>(())
+        });
+        result.map_err(read_error)?;
+        pass.send_all();
         if let Some(e) = pass.failure.take() {
             // The guard removes what was written.
             return Err(e);
         }
-        // The digest is of the whole file, whatever the reader stopped at.
+        let meta = reader.metadata().clone();
         let input = reader.get_mut();
-        io::copy(input, &mut io::sink()).map_err(|e| read_error(ReadError::Io(e)))?;
+        let digest = if input.sha.is_some() {
+            // The digest is of the whole file, whatever the reader stopped at.
+            io::copy(input, &mut io::sink()).map_err(|e| read_error(ReadError::Io(e)))?;
+            let sha = input.sha.take().expect("hashing");
+            Some((sha.finalize().to_vec(), input.read))
+        } else {
+            io::copy(input, &mut io::sink()).map_err(|e| read_error(ReadError::Io(e)))?;
+            None
+        };
         input.report();
-        let (digest, bytes) = (input.sha.clone().finalize(), input.read);
-        let identity = LogIdentity::new(reader.metadata(), file_name, &digest, pass.clock.start());
-        pass.finish(&identity, reader.metadata(), bytes)
+        Ok((pass, meta, digest))
     }
 }
 
-/// The input, hashed as it is read, with progress.
+/// Where a log comes from and how its outputs are named.
+pub(super) struct Source<'a> {
+    file_name: &'a str,
+    /// Errors say this.
+    label: &'a str,
+    stem: &'a str,
+    /// The file to hash on a thread of its own (else it is hashed as read).
+    hash_file: Option<&'a Path>,
+}
+
+/// SHA-256 of a whole file, and its length.
+fn hash_file(path: &Path) -> io::Result<(Vec<u8>, u64)> {
+    let mut file = File::open(path)?;
+    let mut sha = sha2::Sha256::new();
+    let mut buf = vec![0u8; 1 << 20];
+    let mut len = 0u64;
+    loop {
+        let n = match file.read(&mut buf) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        sha.update(&buf[..n]);
+        len += n as u64;
+    }
+    Ok((sha.finalize().to_vec(), len))
+}
+
+/// The input, hashed as it is read (unless hashed elsewhere), with progress.
 struct Hashing<'p, R> {
     inner: R,
-    sha: sha2::Sha256,
+    sha: Option<sha2::Sha256>,
     read: u64,
     unreported: u64,
     progress: Option<&'p (dyn Fn(u64) + Send + Sync)>,
@@ -230,7 +345,9 @@ struct Hashing<'p, R> {
 impl<R: Read> Read for Hashing<'_, R> {
     fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
         let n = self.inner.read(buf)?;
-        self.sha.update(&buf[..n]);
+        if let Some(sha) = &mut self.sha {
+            sha.update(&buf[..n]);
+        }
         self.read += n as u64;
         self.unreported += n as u64;
         if self.unreported >= PROGRESS_STEP {
@@ -297,6 +414,12 @@ impl Reopening {
     }
 }
 
+impl Output for Reopening {
+    fn release(&mut self) {
+        Reopening::release(self);
+    }
+}
+
 impl io::Write for Reopening {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
         self.file()?.write(buf)
@@ -339,9 +462,11 @@ struct Instance {
     /// Where it is written until the pass is done.
     partial: PathBuf,
     window: Admission,
-    table: Table<Reopening>,
-    /// Memory its table holds, as last measured.
-    memory: usize,
+    /// Its table in the encoder.
+    table: usize,
+    /// The rows of its next batch.
+    batch: RowBatch,
+    batch_rows: usize,
 }
 
 /// One topic instance's rows and times (all of them, converted or not).
@@ -354,6 +479,7 @@ struct Summary {
 /// The state of one conversion pass.
 struct Pass<'c> {
     converter: &'c Converter,
+    encoder: &'c Encoder<Reopening>,
     /// The log's stem.
     stem: String,
     /// The first choice of the log's folder: the files are written there (as `.partial`)
@@ -365,8 +491,6 @@ struct Pass<'c> {
     by_msg_id: Vec<(u32, u32)>,
     summaries: Vec<Summary>,
     instances: Vec<Instance>,
-    /// Sum of the instances' `memory`.
-    buffered: usize,
     logged: Vec<LoggedMessage>,
     changes: Vec<ParameterChange>,
     dropouts: Vec<Dropout>,
@@ -374,22 +498,33 @@ struct Pass<'c> {
     diagnostics_omitted: u64,
     skipped: Skipped,
     clock: GpsClock,
+    /// The flight analysis, if asked for.
+    analyzer: Option<Analyzer>,
+    /// Whether the tables take the per-field statistics from their columns (every row of
+    /// every topic converted), not the analyzer.
+    stats_from_columns: bool,
     failure: Option<ConvertError>,
+    /// A table failed: the encoder says which.
+    stopped: bool,
     outputs: Outputs,
 }
 
 impl<'c> Pass<'c> {
-    fn new(converter: &'c Converter, stem: &str) -> Pass<'c> {
+    fn new(converter: &'c Converter, stem: &str, encoder: &'c Encoder<Reopening>) -> Pass<'c> {
+        let options = &converter.options;
+        let stats_from_columns = options.analysis
+            && options.topics.is_empty()
+            && options.window == crate::columns::Window::default();
         Pass {
             converter,
+            encoder,
             stem: stem.to_owned(),
-            log_dir: converter.options.layout.log_dir(stem, 1),
+            log_dir: options.layout.log_dir(stem, 1),
             names: FileNames::new(),
             notes: Vec::new(),
             by_msg_id: vec![(UNSEEN, UNSEEN); 1 << 16],
             summaries: Vec::new(),
             instances: Vec::new(),
-            buffered: 0,
             logged: Vec::new(),
             changes: Vec::new(),
             dropouts: Vec::new(),
@@ -397,22 +532,30 @@ impl<'c> Pass<'c> {
             diagnostics_omitted: 0,
             skipped: Skipped::default(),
             clock: GpsClock::new(0),
+            analyzer: options.analysis.then(|| {
+                if stats_from_columns {
+                    Analyzer::without_field_stats()
+                } else {
+                    Analyzer::new()
+                }
+            }),
+            stats_from_columns,
             failure: None,
+            stopped: false,
             outputs: Outputs::default(),
         }
     }
 
     #[inline]
-    fn event(&mut self, event: &Event<'_>) {
-        if self.failure.is_some() {
+    fn event(&mut self, meta: &crate::read::Metadata, event: &Event<'_>) {
+        if self.failure.is_some() || self.stopped {
             return;
         }
+        if let Some(a) = &mut self.analyzer {
+            a.event(meta, event);
+        }
         match event {
-            Event::Row(row) => {
-                if let Err(e) = self.row(row) {
-                    self.failure = Some(e);
-                }
-            }
+            Event::Row(row) => self.row(row),
             // A msg_id given to another subscription: its rows go where that one says.
             Event::Subscription(sub) => self.by_msg_id[usize::from(sub.msg_id)] = (UNSEEN, UNSEEN),
             Event::Logged(m) => self.logged.push(m.clone()),
@@ -431,7 +574,7 @@ impl<'c> Pass<'c> {
     }
 
     #[inline]
-    fn row(&mut self, row: &Row<'_>) -> Result<(), ConvertError> {
+    fn row(&mut self, row: &Row<'_>) {
         let msg_id = usize::from(row.subscription.msg_id);
         let (mut s, mut i) = self.by_msg_id[msg_id];
         if s == UNSEEN {
@@ -449,55 +592,53 @@ impl<'c> Pass<'c> {
             self.clock.watch(row, at);
         }
         if i == LEFT_OUT {
-            return Ok(());
+            return;
         }
         let k = i as usize - 1;
         let inst = &mut self.instances[k];
         match inst.window.admit(row.timestamp) {
             AdmitRow::Take => {}
-            AdmitRow::Skip | AdmitRow::Stop => return Ok(()),
+            AdmitRow::Skip | AdmitRow::Stop => return,
         }
-        let batched = inst
-            .table
-            .push(row.data, row.timestamp)
-            .map_err(|e| parquet_error(inst, e))?;
-        if batched {
-            // A row group may have been written (the row cap): its file need not stay open.
-            if let Some(out) = inst.table.output() {
-                out.release();
-            }
-            self.measure(k);
-            self.within_budget()?;
+        if inst.batch.push(row.data, row.timestamp) && inst.batch.rows() >= inst.batch_rows {
+            self.send(k);
         }
-        Ok(())
     }
 
-    /// Re-reads the memory an instance's table holds.
-    fn measure(&mut self, k: usize) {
+    /// Hands instance `k`'s batch to the encoder.
+    fn send(&mut self, k: usize) {
         let inst = &mut self.instances[k];
-        let now = inst.table.memory();
-        self.buffered = self.buffered - inst.memory + now;
-        inst.memory = now;
+        if inst.batch.rows() == 0 {
+            return;
+        }
+        let spec = inst.batch.spec().clone();
+        let batch = std::mem::replace(
+            &mut inst.batch,
+            RowBatch::with_capacity(spec, inst.batch_rows),
+        );
+        if self.encoder.push(inst.table, batch).is_err() {
+            self.stopped = true;
+        }
     }
 
-    /// Writes out row groups, largest first, until the buffers fit the budget.
-    fn within_budget(&mut self) -> Result<(), ConvertError> {
-        while self.buffered > self.converter.options.buffer_bytes {
-            let Some(k) = (0..self.instances.len()).max_by_key(|&k| self.instances[k].memory)
-            else {
-                return Ok(());
-            };
-            let inst = &mut self.instances[k];
-            if inst.memory == 0 {
-                return Ok(());
+    /// Hands every instance's last batch to the encoder.
+    fn send_all(&mut self) {
+        for k in 0..self.instances.len() {
+            if !self.stopped {
+                self.send(k);
             }
-            inst.table.flush().map_err(|e| parquet_error(inst, e))?;
-            if let Some(out) = inst.table.output() {
-                out.release();
-            }
-            self.measure(k);
         }
-        Ok(())
+    }
+
+    /// The error of table `t` (as the encoder numbers them: in instance order).
+    fn table_error(&self, t: usize, source: ParquetError) -> ConvertError {
+        let inst = &self.instances[t];
+        ConvertError::Parquet {
+            path: inst.path.clone(),
+            topic: inst.topic.clone(),
+            multi_id: inst.multi_id,
+            source,
+        }
     }
 
     /// Where the rows of a `msg_id` go, decided at its first row (after each subscription).
@@ -567,34 +708,47 @@ impl<'c> Pass<'c> {
         let partial = partial_path(&path);
         // Removed if the conversion fails (if it was made at all).
         self.outputs.paths.push(partial.clone());
+        let options = &converter.options;
         let table = Table::new(
-            spec,
+            &spec,
             topic,
             multi_id,
             Reopening::new(partial.clone()),
-            &converter.options,
+            options,
         );
+        let spec = Arc::new(spec);
+        let batch_rows = options
+            .batch_rows(spec.stored_row_size())
+            .min(options.row_group_rows.max(1));
+        let stats = self
+            .stats_from_columns
+            .then(|| ColumnStats::new(topic, multi_id, spec.clone()));
+        let table = self.encoder.add(TableWork { table, stats });
+        debug_assert_eq!(table, self.instances.len(), "tables in instance order");
         Instance {
             topic: topic.to_owned(),
             multi_id,
             place,
             path,
             partial,
-            window: Admission::new(converter.options.window),
+            window: Admission::new(options.window),
             table,
-            memory: 0,
+            batch: RowBatch::with_capacity(spec, batch_rows),
+            batch_rows,
         }
     }
 
-    /// Closes every table with the log's identity, chooses the log's folder
-    /// ([`Converter::claim_log_dir`]), writes `metadata.json`, then gives every file its
-    /// name, and removes the files of an earlier conversion of this log that this one did
-    /// not write.
+    /// Closes every table with the log's identity (on `threads` threads), chooses the log's
+    /// folder ([`Converter::claim_log_dir`]), writes `metadata.json` (with the analysis),
+    /// then gives every file its name, and removes the files of an earlier conversion of
+    /// this log that this one did not write.
     fn finish(
         mut self,
+        tables: Vec<TableWork<Reopening>>,
         identity: &LogIdentity,
         meta: &crate::read::Metadata,
         bytes: u64,
+        threads: usize,
     ) -> Result<Conversion, ConvertError> {
         let root = self.converter.root.clone();
         let (log_dir, moved) = self.converter.claim_log_dir(&self.stem, &identity.sha256);
@@ -604,27 +758,39 @@ impl<'c> Pass<'c> {
                 self.log_dir
             ));
         }
+        let mut stats = Vec::new();
+        let mut closing = Vec::with_capacity(tables.len());
+        for work in tables {
+            stats.extend(work.stats);
+            closing.push(work.table);
+        }
+        let closed = close_all(closing, identity, threads);
+        let analysis: Option<Analysis> = self.analyzer.take().map(|a| {
+            if self.stats_from_columns {
+                a.finish_with_columns(meta, stats)
+            } else {
+                a.finish(meta)
+            }
+        });
         let mut files = Vec::with_capacity(self.instances.len());
         let mut renames = Vec::new();
-        for inst in std::mem::take(&mut self.instances) {
+        let mut written_tables = Vec::with_capacity(closed.len());
+        for (t, result) in closed.into_iter().enumerate() {
+            written_tables.push(result.map_err(|source| self.table_error(t, source))?);
+        }
+        for (inst, (written, TableWritten { rows, row_groups })) in
+            std::mem::take(&mut self.instances)
+                .into_iter()
+                .zip(written_tables)
+        {
             let Instance {
                 topic,
                 multi_id,
                 place,
                 partial,
-                table,
-                path: first_choice,
                 ..
             } = inst;
             let path = place.path(&root, &log_dir);
-            let (written, TableWritten { rows, row_groups }) = table
-                .close(identity, false)
-                .map_err(|source| ConvertError::Parquet {
-                    path: first_choice,
-                    topic: topic.clone(),
-                    multi_id,
-                    source,
-                })?;
             if !written {
                 // No row in the window: no file.
                 continue;
@@ -657,6 +823,7 @@ impl<'c> Pass<'c> {
         let document = MetadataJson {
             log: identity,
             facts: &facts,
+            analysis: analysis.as_ref(),
             files: files
                 .iter()
                 .map(|f| FileEntry {
@@ -703,6 +870,50 @@ impl<'c> Pass<'c> {
     }
 }
 
+/// A closed table: whether a file was written, and what it holds.
+type Closed = Result<(bool, TableWritten), ParquetError>;
+
+/// Closes every table (its last row group and footer, with the log's identity) on up to
+/// `threads` threads; the results in the tables' order.
+fn close_all(tables: Vec<Table<Reopening>>, identity: &LogIdentity, threads: usize) -> Vec<Closed> {
+    let slots: Vec<std::sync::Mutex<Option<Table<Reopening>>>> = tables
+        .into_iter()
+        .map(|t| std::sync::Mutex::new(Some(t)))
+        .collect();
+    let results: Vec<std::sync::Mutex<Option<Closed>>> =
+        slots.iter().map(|_| std::sync::Mutex::new(None)).collect();
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let work = || {
+        loop {
+            let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            let Some(slot) = slots.get(k) else { break };
+            let table = slot
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+                .take()
+                .expect("each table closed once");
+            let result = table.close(identity, false);
+            *results[k]
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner) = Some(result);
+        }
+    };
+    std::thread::scope(|s| {
+        for _ in 1..threads.clamp(1, slots.len().max(1)) {
+            s.spawn(work);
+        }
+        work();
+    });
+    results
+        .into_iter()
+        .map(|r| {
+            r.into_inner()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+                .expect("every table closed")
+        })
+        .collect()
+}
+
 /// The Parquet files an earlier conversion listed in its `metadata.json` (inside `root`,
 /// named `*.parquet`), to remove those the new one does not write.
 fn earlier_files(root: &Path, metadata: &Path) -> Vec<PathBuf> {
@@ -728,15 +939,6 @@ fn earlier_files(root: &Path, metadata: &Path) -> Vec<PathBuf> {
         .collect()
 }
 
-fn parquet_error(inst: &Instance, source: ParquetError) -> ConvertError {
-    ConvertError::Parquet {
-        path: inst.path.clone(),
-        topic: inst.topic.clone(),
-        multi_id: inst.multi_id,
-        source,
-    }
-}
-
 /// Where a file is written before it is complete: a reader globbing `*.parquet` never sees
 /// a half-written one.
 fn partial_path(path: &Path) -> PathBuf {
@@ -751,6 +953,9 @@ struct MetadataJson<'a> {
     log: &'a LogIdentity,
     #[serde(flatten)]
     facts: &'a LogFacts,
+    /// The flight analysis ([`crate::analysis`]), unless left out.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    analysis: Option<&'a Analysis>,
     files: Vec<FileEntry<'a>>,
 }
 

@@ -195,18 +195,26 @@ impl Converter {
         let results: Vec<Mutex<Option<Result<Conversion, ConvertError>>>> =
             paths.iter().map(|_| Mutex::new(None)).collect();
         let next = AtomicUsize::new(0);
+        let threads = threads.max(1);
+        let at_once = threads.min(groups.len().max(1));
+        // One log at a time: its row groups encoded on the other threads.
+        let encoders = if at_once > 1 {
+            self.encoders(at_once)
+        } else {
+            self.options.encoders.unwrap_or(threads - 1)
+        };
         let work = || {
             loop {
                 let g = next.fetch_add(1, Ordering::Relaxed);
                 let Some(group) = groups.get(g) else { break };
                 for &i in group {
-                    let result = self.convert_as(&paths[i], &stems[i]);
+                    let result = self.convert_as(&paths[i], &stems[i], encoders);
                     *results[i].lock().unwrap_or_else(|e| e.into_inner()) = Some(result);
                 }
             }
         };
         std::thread::scope(|scope| {
-            for _ in 1..threads.clamp(1, groups.len().max(1)) {
+            for _ in 1..at_once {
                 scope.spawn(work);
             }
             work();

@@ -23,6 +23,7 @@
 //! (`ulog.type`).
 
 mod convert;
+mod encode;
 mod fleet;
 #[cfg(test)]
 mod tests;
@@ -39,7 +40,7 @@ pub use convert::{Conversion, ConvertError, Converter, WrittenFile};
 
 pub use fleet::Layout;
 
-use super::{ColumnBuilder, ColumnSpec, Window, arrow::record_batch};
+use super::{ColumnBuilder, ColumnSpec, Columns, Window, arrow::record_batch};
 use crate::read::{Log, Metadata, Row, Subscription};
 
 use crate::schema::{FieldKind, Primitive, Schema};
@@ -75,6 +76,14 @@ pub struct ParquetOptions {
     pub window: Window,
     /// Where the files of a conversion go.
     pub layout: Layout,
+    /// The flight analysis ([`crate::analysis`]) in `metadata.json` (under `analysis`), as
+    /// PX4's Flight Review converter writes its own.
+    pub analysis: bool,
+    /// Threads encoding one log's row groups beside the thread that reads it (0: none, the
+    /// reading thread encodes). [`Converter::convert_file`] with the default (`None`)
+    /// uses every core; [`Converter::convert_files`] of several logs at once, one thread a
+    /// log.
+    pub encoders: Option<usize>,
 }
 
 impl Default for ParquetOptions {
@@ -89,6 +98,8 @@ impl Default for ParquetOptions {
             topics: Vec::new(),
             window: Window::default(),
             layout: Layout::PerLog,
+            analysis: true,
+            encoders: None,
         }
     }
 }
@@ -349,7 +360,11 @@ pub fn write_topic<W: Write + Send>(
     };
     let id = subs.first().and_then(|s| s.format()).ok_or_else(no_such)?;
     let spec = ColumnSpec::of(log.metadata().schema(), id).ok_or_else(no_such)?;
-    let mut table = Table::new(spec, topic, multi_id, out, options);
+    let mut table = Table::new(&spec, topic, multi_id, out, options);
+    let batch_rows = options
+        .batch_rows(spec.stored_row_size())
+        .min(options.row_group_rows.max(1));
+    let mut builder = ColumnBuilder::with_capacity(spec, batch_rows);
     let mut window = Admission::new(options.window);
     for row in log.instance_rows(&subs) {
         match window.admit(row.timestamp) {
@@ -357,10 +372,14 @@ pub fn write_topic<W: Write + Send>(
             AdmitRow::Stop => break,
             AdmitRow::Take => {}
         }
-        if table.push(row.data, row.timestamp)? && table.memory() > options.buffer_bytes {
-            table.write_row_group()?;
+        if builder.push(row.data, row.timestamp) && builder.rows() >= batch_rows {
+            table.append(builder.take())?;
+            if table.memory() > options.buffer_bytes {
+                table.write_row_group()?;
+            }
         }
     }
+    table.append(builder.take())?;
     Ok(table.close(identity, true)?.1)
 }
 
@@ -407,22 +426,18 @@ impl Admission {
     }
 }
 
-/// One table being written: rows collected into batches, batches held until they make a
-/// row group, each row group encoded and written at once, the file begun only with the
-/// first row group. (A row group in progress holds a ZSTD context per column, a few
-/// hundred kilobytes each once it has compressed a page: encoding row groups one at a
-/// time, instead of keeping one open per table, keeps a log of thousands of columns within
-/// its budget.)
+/// One table being written: batches of columns held until they make a row group, each
+/// row group encoded and written at once, the file begun only with the first row group. (A
+/// row group in progress holds a ZSTD context per column, a few hundred kilobytes each
+/// once it has compressed a page: encoding row groups one at a time, instead of keeping
+/// one open per table, keeps a log of thousands of columns within its budget.)
 struct Table<W: Write + Send> {
-    builder: ColumnBuilder,
     schema: arrow_schema::SchemaRef,
     /// The writer, once the first row group is written; until then its output and
     /// properties.
     writer: Option<ArrowWriter<W>>,
     out: Option<(W, WriterProperties)>,
     properties_error: Option<ParquetError>,
-    batch_rows: usize,
-    row_size: usize,
     row_group_rows: usize,
     /// Batches of the next row group.
     pending: Vec<arrow_array::RecordBatch>,
@@ -433,30 +448,24 @@ struct Table<W: Write + Send> {
 
 impl<W: Write + Send> Table<W> {
     fn new(
-        spec: ColumnSpec,
+        spec: &ColumnSpec,
         topic: &str,
         multi_id: u8,
         out: W,
         options: &ParquetOptions,
     ) -> Table<W> {
-        let schema = super::arrow::schema(&spec, topic);
+        let schema = super::arrow::schema(spec, topic);
         let kv = table_key_values(topic, multi_id, spec.format());
-        let row_group_rows = options.row_group_rows.max(1);
-        let row_size = spec.stored_row_size();
-        let batch_rows = options.batch_rows(row_size).min(row_group_rows);
         let (out, properties_error) = match options.properties(kv) {
             Ok(p) => (Some((out, p)), None),
             Err(e) => (None, Some(e)),
         };
         Table {
-            builder: ColumnBuilder::with_capacity(spec, batch_rows),
             schema,
             writer: None,
             out,
             properties_error,
-            batch_rows,
-            row_size,
-            row_group_rows,
+            row_group_rows: options.row_group_rows.max(1),
             pending: Vec::new(),
             pending_rows: 0,
             pending_bytes: 0,
@@ -464,40 +473,27 @@ impl<W: Write + Send> Table<W> {
         }
     }
 
-    /// Adds a row; returns whether a batch was completed (and the table's memory grew).
-    #[inline]
-    fn push(&mut self, data: &[u8], timestamp: u64) -> Result<bool, ParquetError> {
-        if self.builder.push(data, timestamp) {
-            self.rows += 1;
-            if self.builder.rows() >= self.batch_rows {
-                self.seal()?;
-                return Ok(true);
-            }
-        }
-        Ok(false)
-    }
-
-    /// Makes a batch of the rows collected; writes a row group first if the batch would
-    /// make the pending one too long.
-    fn seal(&mut self) -> Result<(), ParquetError> {
-        let rows = self.builder.rows();
+    /// Adds a batch of columns; writes a row group first if the batch would make the
+    /// pending one too long.
+    fn append(&mut self, columns: Columns) -> Result<(), ParquetError> {
+        let rows = columns.rows();
         if rows == 0 {
             return Ok(());
         }
         if self.pending_rows > 0 && self.pending_rows + rows > self.row_group_rows {
             self.write_row_group()?;
         }
-        let batch = record_batch(&self.schema, self.builder.take())?;
+        let batch = record_batch(&self.schema, columns)?;
         self.pending_bytes += batch.get_array_memory_size();
         self.pending_rows += rows;
+        self.rows += rows;
         self.pending.push(batch);
         Ok(())
     }
 
-    /// Memory the table holds: its batches waiting for their row group, and the rows of
-    /// the batch being filled.
+    /// Memory the table holds: its batches waiting for their row group.
     fn memory(&self) -> usize {
-        self.pending_bytes + self.builder.rows() * self.row_size
+        self.pending_bytes
     }
 
     /// The writer, made on first use.
@@ -531,7 +527,6 @@ impl<W: Write + Send> Table<W> {
 
     /// Writes everything collected, as a row group.
     fn flush(&mut self) -> Result<(), ParquetError> {
-        self.seal()?;
         self.write_row_group()
     }
 

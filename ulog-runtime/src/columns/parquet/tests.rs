@@ -675,3 +675,69 @@ fn logs_of_one_stem_in_one_run_take_folders_in_the_order_given() {
     }
     std::fs::remove_dir_all(&root).unwrap();
 }
+
+#[test]
+fn metadata_json_holds_the_flight_analysis_unless_left_out() {
+    use crate::analysis::tests::{Faults, flight};
+    let bytes = flight(Faults {
+        motor: true,
+        steps: true,
+        ..Faults::default()
+    });
+    // Through text, as metadata.json is read (the same parsing of each number).
+    let expected: serde_json::Value = serde_json::from_str(
+        &serde_json::to_string(&crate::analysis::Analysis::of_log(
+            &Log::from_slice(&bytes).unwrap(),
+        ))
+        .unwrap(),
+    )
+    .unwrap();
+    for encoders in [Some(0), Some(2), None] {
+        let root = temp(&format!("analysis-{encoders:?}"));
+        let conv = Converter::new(
+            &root,
+            ParquetOptions {
+                encoders,
+                ..ParquetOptions::default()
+            },
+        )
+        .convert_reader(&bytes[..], "flight.ulg")
+        .unwrap();
+        let doc: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&conv.metadata).unwrap()).unwrap();
+        let mut got = doc["analysis"].clone();
+        // The per-field means are summed in another order (columns, not rows): equal to
+        // the last bits.
+        let (want_fields, got_fields) = (
+            expected["field_stats"].as_array().unwrap(),
+            got["field_stats"].as_array().unwrap(),
+        );
+        assert_eq!(want_fields.len(), got_fields.len(), "{encoders:?}");
+        for (w, g) in want_fields.iter().zip(got_fields) {
+            for key in ["topic", "multi_id", "field", "min", "max", "count"] {
+                assert_eq!(w[key], g[key], "{encoders:?}: {w}");
+            }
+            let (wm, gm) = (w["mean"].as_f64().unwrap(), g["mean"].as_f64().unwrap());
+            assert!((wm - gm).abs() <= 1e-12 * wm.abs().max(1.0), "{w} vs {g}");
+        }
+        got["field_stats"] = expected["field_stats"].clone();
+        assert_eq!(got, expected, "{encoders:?}: the analysis of the log");
+        assert_eq!(got["diagnostics"][0]["id"], "motor_failure");
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+    let root = temp("no-analysis");
+    let conv = Converter::new(
+        &root,
+        ParquetOptions {
+            analysis: false,
+            ..ParquetOptions::default()
+        },
+    )
+    .convert_reader(&bytes[..], "flight.ulg")
+    .unwrap();
+    let doc: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&conv.metadata).unwrap()).unwrap();
+    assert!(doc.get("analysis").is_none(), "left out when asked");
+    assert!(doc.get("files").is_some());
+    std::fs::remove_dir_all(&root).unwrap();
+}
