@@ -49,6 +49,8 @@ pub mod events;
 pub mod file_names;
 pub mod pytext;
 pub mod read;
+#[cfg(feature = "report")]
+pub mod report;
 pub mod rewrite;
 pub mod schema;
 pub mod tools;

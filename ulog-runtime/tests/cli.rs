@@ -18,6 +18,8 @@ mod files;
 mod parquet;
 #[path = "cli/pyulog_tools.rs"]
 mod pyulog_tools;
+#[path = "cli/report.rs"]
+mod report;
 
 use corpus::{corpus_dir, corpus_files, pyulog_blind_ranges, short_name, under_ci};
 

@@ -7,7 +7,9 @@
 use std::sync::Arc;
 
 use super::FieldStat;
-use crate::columns::{ColumnKind, ColumnSpec, ColumnValues, Columns, RowBatch, Source};
+use crate::columns::{ColumnKind, ColumnSpec, RowBatch, Source};
+#[cfg(feature = "parquet")]
+use crate::columns::{ColumnValues, Columns};
 use crate::read::Subscription;
 use crate::schema::{Primitive, Schema};
 
@@ -75,9 +77,11 @@ impl Acc {
 }
 
 /// The field statistics of one topic instance taken from its columns, batch by batch.
+#[cfg(feature = "parquet")]
 #[derive(Debug, Clone)]
 pub(crate) struct ColumnStats(Acc);
 
+#[cfg(feature = "parquet")]
 impl ColumnStats {
     /// Statistics of the columns of `spec`, nothing seen.
     pub(crate) fn new(topic: &str, multi_id: u8, spec: Arc<ColumnSpec>) -> ColumnStats {
@@ -121,6 +125,7 @@ impl FieldStats {
     }
 
     /// The statistics of columns taken apart ([`ColumnStats`]).
+    #[cfg(feature = "parquet")]
     pub(crate) fn from_columns(stats: Vec<ColumnStats>) -> FieldStats {
         FieldStats {
             accs: stats.into_iter().map(|c| c.0).collect(),
@@ -235,6 +240,7 @@ fn reduce(bytes: &[u8], stride: usize, at: usize, p: Primitive, stat: &mut Stat)
 }
 
 /// Folds the values of one column into `stat`, as [`reduce`] does rows.
+#[cfg(feature = "parquet")]
 #[allow(clippy::cast_precision_loss)]
 fn reduce_column(values: &ColumnValues, stat: &mut Stat) {
     fn fold<T: Copy>(values: &[T], to_f64: impl Fn(T) -> f64, stat: &mut Stat) {

@@ -47,6 +47,9 @@ use crate::read::{Log, Metadata, Row, Subscription};
 use crate::{Event, ReadError, StreamReader};
 
 pub use diagnostics::{Diagnostic, Evidence, Severity};
+pub use sensors::{
+    VIBRATION_CRITICAL_MEAN, VIBRATION_CRITICAL_PEAK, VIBRATION_GOOD_MEAN, VIBRATION_GOOD_PEAK,
+};
 
 /// Everything the analysis found ([module docs](self)).
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -421,6 +424,7 @@ impl Analyzer {
 
     /// An analyzer without the per-field statistics, which its caller takes from columns it
     /// makes anyway ([`Analyzer::finish_with_columns`]).
+    #[cfg(feature = "parquet")]
     pub(crate) fn without_field_stats() -> Analyzer {
         Analyzer::of_parts(Parts {
             fields: false,
@@ -429,6 +433,7 @@ impl Analyzer {
     }
 
     /// [`Analyzer::finish`], the per-field statistics those of `columns`.
+    #[cfg(feature = "parquet")]
     pub(crate) fn finish_with_columns(
         mut self,
         meta: &Metadata,

@@ -130,6 +130,8 @@ impl Modes {
                 end_us: end.max(start),
             });
         }
+        // By start time: a log whose rows go back in time (appended parts) gives its
+        // intervals out of order.
         let close = |mut v: Vec<Interval>, open: Option<u64>| {
             if let Some(start) = open {
                 v.push(Interval {
@@ -137,6 +139,7 @@ impl Modes {
                     end_us: end.max(start),
                 });
             }
+            v.sort_by_key(|i| i.start_us);
             v
         };
         if !state.status_seen {

@@ -159,11 +159,24 @@ fn keep_min(a: &mut Option<f64>, v: f64) {
     }
 }
 
+/// `accel_vibration_metric` (m/s²) whose mean is good below this (PX4's).
+pub const VIBRATION_GOOD_MEAN: f64 = 4.905;
+/// ... critical from this.
+pub const VIBRATION_CRITICAL_MEAN: f64 = 9.81;
+/// Its peak: good below this.
+pub const VIBRATION_GOOD_PEAK: f64 = 9.81;
+/// ... critical from this.
+pub const VIBRATION_CRITICAL_PEAK: f64 = 19.62;
+
 /// PX4's vibration classes of `accel_vibration_metric`: the mean's and the peak's, the
 /// worse of the two.
 pub(crate) fn vibration_status(mean: f64, max: f64) -> &'static str {
     let class = |v: f64, warn: f64, crit: f64| u8::from(v >= warn) + u8::from(v >= crit);
-    match class(mean, 4.905, 9.81).max(class(max, 9.81, 19.62)) {
+    match class(mean, VIBRATION_GOOD_MEAN, VIBRATION_CRITICAL_MEAN).max(class(
+        max,
+        VIBRATION_GOOD_PEAK,
+        VIBRATION_CRITICAL_PEAK,
+    )) {
         0 => "good",
         1 => "warning",
         _ => "critical",

@@ -22,6 +22,7 @@ mod kml;
 mod messages;
 mod params;
 mod parquet;
+mod report;
 
 /// Inspect, export and generate code from PX4 ULog (.ulg) flight logs.
 #[derive(Parser)]
@@ -61,6 +62,8 @@ enum Command {
     Anonymize(anonymize::Args),
     /// The flight analysis: modes, statistics, battery, GPS, vibration, diagnostics.
     Analyze(analyze::Args),
+    /// A flight report: one self-contained HTML file of plots and tables.
+    Report(report::Args),
 }
 
 /// An error for the one line `ulog` prints: `ulog: PATH: message`.
@@ -161,6 +164,7 @@ fn run(command: Command, out: &mut impl Write) -> Result<(), Failure> {
         Command::Cut(args) => cut::run(&args, out),
         Command::Anonymize(args) => anonymize::run(&args, out),
         Command::Analyze(args) => analyze::run(&args, out),
+        Command::Report(args) => report::run(&args, out),
     }
 }
 

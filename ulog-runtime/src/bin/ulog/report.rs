@@ -1,0 +1,46 @@
+//! `ulog report`: a flight report of a log as one self-contained HTML file, over
+//! `report::Report`.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use ulog_runtime::report::Report;
+
+use crate::Failure;
+
+/// `ulog report FILE [-o report.html]`.
+#[derive(clap::Args)]
+pub(crate) struct Args {
+    /// The log.
+    file: PathBuf,
+    /// The HTML file to write (default: the log's name with `.html`, in the current folder).
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+}
+
+pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
+    let log = crate::open(&args.file)?;
+    let name = args.file.file_name().map_or_else(
+        || args.file.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    let report = Report::of_log(&log, &name)
+        .map_err(|e| Failure::exit(1, format!("{}: {e}", args.file.display())))?;
+    let path = args.output.clone().unwrap_or_else(|| {
+        PathBuf::from(format!(
+            "{}.html",
+            ulog_runtime::file_names::log_stem(&args.file)
+        ))
+    });
+    std::fs::write(&path, report.html())
+        .map_err(|e| Failure::exit(1, format!("{}: {e}", path.display())))?;
+    writeln!(
+        out,
+        "{}: {} plots ({} the log cannot give), {}",
+        args.file.display(),
+        report.plots.len(),
+        report.left_out.len(),
+        path.display()
+    )?;
+    Ok(())
+}
