@@ -14,6 +14,8 @@ mod corpus;
 #[allow(unreachable_pub)]
 mod files;
 
+#[path = "cli/analyze.rs"]
+mod analyze;
 #[path = "cli/parquet.rs"]
 mod parquet;
 #[path = "cli/pyulog_tools.rs"]

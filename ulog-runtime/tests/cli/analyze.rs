@@ -1,0 +1,111 @@
+//! `ulog analyze --json` on every corpus log against the same statistics computed from
+//! pyulog's arrays with numpy (`tests/py/analysis_check.py`): field statistics, motion,
+//! battery, GPS quality, vibration and flight modes; and no diagnostic where the rules say
+//! there can be none (outside armed time), none at all on the corpus's known flights.
+
+use std::path::Path;
+use std::process::Command;
+
+use super::corpus::{corpus_files, short_name, under_ci};
+use super::{stdout, temp_dir};
+
+/// The corpus logs known to be flights without a fault (or no flight at all).
+const CLEAN: [&str; 14] = [
+    "yule_log/trig_stats.ulg",
+    "yule_log/powers.ulg",
+    "yule_log/short_list.ulg",
+    "pyulog/sample_log_small.ulg",
+    "pyulog/sample_2016.ulg",
+    "pyulog/sample_unordered.ulg",
+    "pyulog/sample_px4_events.ulg",
+    "pyulog/sample.ulg",
+    "pyulog/sample_appended_multiple.ulg",
+    "px4-ulog-rs/quadrotor_local.ulg",
+    "px4-ulog-rs/corrupt_unregistered_msg_id.ulg",
+    "px4-ulog-rs/6ba1abc7-b433-4029-b8f5-3b2bb12d3b6c.ulg",
+    "px4-ulog-rs/corrupt_actuator_armed_wrong_size.ulg",
+    "px4-ulog-rs/corrupt_format_not_utf8.ulg",
+];
+
+fn numpy_and_pyulog() -> bool {
+    let ok = Command::new("python3")
+        .args(["-c", "import numpy, pyulog"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    assert!(
+        ok || !under_ci(),
+        "under CI python3 must have numpy and pyulog (.ci/run installs them)"
+    );
+    if !ok {
+        eprintln!("python3 lacks numpy or pyulog: the analysis is not compared");
+    }
+    ok
+}
+
+#[test]
+fn the_analysis_of_every_corpus_log_equals_numpy_on_pyulogs_arrays() {
+    let dir = temp_dir("analyze");
+    let compare = numpy_and_pyulog();
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/py/analysis_check.py");
+    let mut compared = 0u64;
+    for log in corpus_files() {
+        let name = short_name(&log);
+        let json = stdout(&["analyze", "--json", log.to_str().unwrap()]);
+        let analysis: serde_json::Value = serde_json::from_str(&json).unwrap();
+        // Every rule is about armed (or flying) time.
+        let armed: Vec<(u64, u64)> = analysis["armed"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|i| {
+                (
+                    i["start_us"].as_u64().unwrap(),
+                    i["end_us"].as_u64().unwrap(),
+                )
+            })
+            .collect();
+        for d in analysis["diagnostics"].as_array().unwrap() {
+            let t = d["timestamp_us"].as_u64().unwrap();
+            assert!(
+                armed.iter().any(|(a, b)| (*a..=*b).contains(&t)),
+                "{name}: a diagnostic outside armed time: {d}"
+            );
+        }
+        if CLEAN.contains(&name.as_str()) {
+            assert_eq!(
+                analysis["diagnostics"].as_array().unwrap().len(),
+                0,
+                "{name}: a clean flight: {}",
+                analysis["diagnostics"]
+            );
+        }
+        if !compare {
+            continue;
+        }
+        let path = dir.join("analysis.json");
+        std::fs::write(&path, &json).unwrap();
+        let out = Command::new("python3")
+            .arg(&script)
+            .arg(&log)
+            .arg(&path)
+            .output()
+            .expect("python3 runs");
+        assert!(
+            out.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(
+            summary["mismatches"].as_array().unwrap().len(),
+            0,
+            "{name}: {}",
+            summary["mismatches"]
+        );
+        let n = summary["compared"].as_u64().unwrap();
+        assert!(n > 0, "{name}: nothing compared");
+        compared += n;
+    }
+    eprintln!("{compared} facts compared with numpy");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
