@@ -41,6 +41,7 @@ pub mod analysis;
 #[cfg(feature = "codegen")]
 pub mod codegen;
 pub mod columns;
+pub mod compat;
 #[cfg(feature = "serde")]
 pub mod document;
 mod error;

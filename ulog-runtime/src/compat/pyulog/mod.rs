@@ -1,0 +1,942 @@
+//! A log as pyulog 1.3.0's `ULog(log_file, message_name_filter_list,
+//! disable_str_exceptions, parse_header_only)` reads it: every attribute of its data model,
+//! by its rules, quirks included, so that code built on it gives a pyulog script's answers.
+//!
+//! What pyulog does that this reproduces (this reader itself keeps more):
+//! - the info key is the second word of `type key` (cut at the next space); a value of a type
+//!   it cannot unpack is raw bytes; `char` a one-byte string of bytes;
+//! - a row is taken only if its size is exactly the format's without its trailing padding;
+//!   a row of another size, a row of a msg_id never subscribed, a format that cannot be
+//!   resolved, mark the file corrupt and are left out;
+//! - an `I`, `P`, `O`, `L`, `C` or `A` too short for what it holds, or a row whose
+//!   timestamp (read as 8 bytes where the first field named `timestamp` starts) lies past
+//!   its end, ends the data section there, silently;
+//! - a message of an unknown type is skipped, and the sync bytes looked for in it; an
+//!   impossible header (type 0, size 0 or above 10,000) moves on by one byte and looks for
+//!   the next sync sequence in the rest of the file;
+//! - a re-subscription of a msg_id replaces the subscription and drops its rows; a segment
+//!   of appended data starts with no subscription; datasets are made per segment, the last
+//!   subscribed first, then sorted by name and instance;
+//! - `last_timestamp` is the largest row timestamp, a dropout's timestamp the largest seen
+//!   when it was read, a changed parameter's too;
+//! - text is UTF-8 with invalid bytes left out, or an error ([`PyulogError::Unicode`]) when
+//!   strings are strict.
+//!
+//! Where pyulog would not finish (a header whose size leads its recovery backwards forever,
+//! a format nesting itself, a format of millions of fields), this stops with the file
+//! marked corrupt, or an error pyulog would raise ([`PyulogError::Recursion`]).
+
+use std::collections::HashSet;
+
+/// Which topics' rows are kept (pyulog's `message_name_filter_list`).
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub enum NameFilter {
+    /// Every topic (`None`).
+    #[default]
+    All,
+    /// Topics named in the list.
+    Names(Vec<String>),
+    /// Topics whose name is part of this text (pyulog given a `str`: `name in text`).
+    Substring(String),
+}
+
+impl NameFilter {
+    fn keeps(&self, name: &str) -> bool {
+        match self {
+            NameFilter::All => true,
+            NameFilter::Names(names) => names.iter().any(|n| n == name),
+            NameFilter::Substring(text) => text.contains(name),
+        }
+    }
+}
+
+/// How to read.
+#[derive(Debug, Clone, Default)]
+pub struct PyulogOptions {
+    /// The topics kept.
+    pub filter: NameFilter,
+    /// Strings must be UTF-8 (pyulog's `disable_str_exceptions=False`).
+    pub strict_strings: bool,
+    /// Only the header and the definitions (`parse_header_only`).
+    pub header_only: bool,
+    /// Where in the file (or stream) the bytes start: pyulog's positions are absolute.
+    pub base_offset: u64,
+}
+
+/// A value as pyulog's `struct.unpack` or `parse_string` gives it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PyValue {
+    /// A signed integer type.
+    Int(i64),
+    /// An unsigned integer type.
+    UInt(u64),
+    /// `float` (widened) or `double`.
+    Float(f64),
+    /// `bool`.
+    Bool(bool),
+    /// `char[N]`.
+    Str(String),
+    /// A scalar `char` (one byte) or a type pyulog does not unpack (raw bytes).
+    Bytes(Vec<u8>),
+}
+
+/// A logged string (`L`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Logged {
+    /// The level byte as written (`b'6'` is 54).
+    pub level: u8,
+    /// µs.
+    pub timestamp: u64,
+    /// The text.
+    pub message: String,
+}
+
+/// A tagged logged string (`C`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Tagged {
+    /// The level byte.
+    pub level: u8,
+    /// The tag.
+    pub tag: u16,
+    /// µs.
+    pub timestamp: u64,
+    /// The text.
+    pub message: String,
+}
+
+/// A format as pyulog keeps it: its fields as (type, array size or 0, name).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Format {
+    /// The name before `:`.
+    pub name: String,
+    /// The fields.
+    pub fields: Vec<(String, u32, String)>,
+}
+
+/// One of pyulog's `Data`: a subscription's rows.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Dataset {
+    /// The topic.
+    pub name: String,
+    /// The instance.
+    pub multi_id: u8,
+    /// The msg_id.
+    pub msg_id: u16,
+    /// The flattened fields: (name, type), trailing padding removed.
+    pub fields: Vec<(String, String)>,
+    /// The index of the field named `timestamp`, or -1.
+    pub timestamp_idx: i64,
+    /// The rows, packed, each [`Dataset::row_size`] bytes.
+    pub rows: Vec<u8>,
+    /// Bytes a row.
+    pub row_size: usize,
+}
+
+/// Everything pyulog's `ULog` holds after reading (its private attributes by name).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PyulogFile {
+    /// `_file_corrupt`.
+    pub file_corrupt: bool,
+    /// `_start_timestamp`.
+    pub start_timestamp: u64,
+    /// `_last_timestamp`.
+    pub last_timestamp: u64,
+    /// `_msg_info_dict` and its types: (key, type, value) in the dict's order.
+    pub info: Vec<(String, String, PyValue)>,
+    /// `_msg_info_multiple_dict` and its types (the first message's).
+    pub info_multiple: Vec<(String, String, Vec<Vec<PyValue>>)>,
+    /// `_initial_parameters`, in the dict's order.
+    pub initial_parameters: Vec<(String, PyValue)>,
+    /// `_default_parameters`: per key (pyulog's: a bit's value less one), the dict's items.
+    pub default_parameters: Vec<(u8, Vec<(String, PyValue)>)>,
+    /// `_changed_parameters`: (timestamp, name, value).
+    pub changed_parameters: Vec<(u64, String, PyValue)>,
+    /// `_message_formats`, in the dict's order.
+    pub formats: Vec<Format>,
+    /// `_logged_messages`.
+    pub logged: Vec<Logged>,
+    /// `_logged_messages_tagged`: per tag in order of first appearance.
+    pub tagged: Vec<(u16, Vec<Tagged>)>,
+    /// `_dropouts`: (duration ms, timestamp).
+    pub dropouts: Vec<(u16, u64)>,
+    /// `_data_list`.
+    pub data: Vec<Dataset>,
+    /// `_filtered_message_ids`.
+    pub filtered_ids: Vec<u16>,
+    /// `_missing_message_ids`.
+    pub missing_ids: Vec<u16>,
+    /// `_file_version`.
+    pub file_version: u8,
+    /// `_compat_flags`.
+    pub compat_flags: [u8; 8],
+    /// `_incompat_flags`.
+    pub incompat_flags: [u8; 8],
+    /// `_appended_offsets`.
+    pub appended_offsets: Vec<u64>,
+    /// `_has_sync`.
+    pub has_sync: bool,
+    /// `_sync_seq_cnt`.
+    pub sync_seq_cnt: u64,
+    /// What pyulog prints on stdout while reading, line by line.
+    pub printed: Vec<String>,
+}
+
+/// Why pyulog's constructor raises.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum PyulogError {
+    /// `ULogException` with this message.
+    #[error("{0}")]
+    Header(&'static str),
+    /// `ULogIncompatibleFlagException`.
+    #[error("Unknown incompatible flag set: cannot parse the log")]
+    IncompatibleFlag,
+    /// `UnicodeDecodeError('utf-8', bytes, start, end, reason)` (strict strings).
+    #[error("'utf-8' codec can't decode byte at position {start}: {reason}")]
+    Unicode {
+        /// The bytes decoded.
+        bytes: Vec<u8>,
+        /// Where the invalid bytes start.
+        start: usize,
+        /// Where they end.
+        end: usize,
+        /// Python's reason.
+        reason: &'static str,
+    },
+    /// `RecursionError`: a format nests itself.
+    #[error("maximum recursion depth exceeded while flattening format `{0}`")]
+    Recursion(String),
+}
+
+/// pyulog's message types.
+const SYNC: [u8; 8] = [0x2F, 0x73, 0x13, 0x20, 0x25, 0x0C, 0xBB, 0x12];
+const HEADER: &[u8; 7] = b"ULog\x01\x12\x35";
+/// Flattened fields a subscription may have before it is taken as corrupt (pyulog would
+/// run out of memory).
+const MAX_FIELDS: usize = 1 << 20;
+/// Nesting depth of formats beyond which pyulog's recursion fails.
+const MAX_DEPTH: usize = 900;
+
+/// A basic type's size, as `_UNPACK_TYPES` has it.
+fn basic_size(t: &str) -> Option<usize> {
+    Some(match t {
+        "int8_t" | "uint8_t" | "bool" | "char" => 1,
+        "int16_t" | "uint16_t" => 2,
+        "int32_t" | "uint32_t" | "float" => 4,
+        "int64_t" | "uint64_t" | "double" => 8,
+        _ => return None,
+    })
+}
+
+/// A Python exception that a message's parsing raises, as pyulog's handlers sort them.
+#[derive(Debug)]
+enum Raise {
+    /// `IndexError`, `KeyError`, `ValueError`, `OverflowError`: the file is corrupt.
+    Corrupt,
+    /// `struct.error`: too few bytes for an unpack.
+    Struct,
+    /// Out of the constructor.
+    Fatal(PyulogError),
+}
+
+type Step<T> = Result<T, Raise>;
+
+/// Reads `data` as pyulog does.
+pub fn read(data: &[u8], options: &PyulogOptions) -> Result<PyulogFile, PyulogError> {
+    let mut r = Reader {
+        data,
+        pos: 0,
+        options,
+        f: PyulogFile {
+            has_sync: true,
+            ..PyulogFile::default()
+        },
+        subscriptions: Vec::new(),
+        filtered: HashSet::new(),
+        missing: HashSet::new(),
+    };
+    r.header()?;
+    r.f.last_timestamp = r.f.start_timestamp;
+    r.definitions()?;
+    if !options.header_only {
+        let appended = r.f.incompat_flags[0] & 1 != 0 && !r.f.appended_offsets.is_empty();
+        if appended {
+            for offset in r.f.appended_offsets.clone() {
+                r.data_section(Some(offset))?;
+                // A seek to an offset before the bytes (or absurd) fails: corrupt.
+                match offset.checked_sub(options.base_offset) {
+                    Some(p) if offset < (1 << 63) => {
+                        r.pos = usize::try_from(p).unwrap_or(usize::MAX)
+                    }
+                    _ => {
+                        r.f.file_corrupt = true;
+                        break;
+                    }
+                }
+            }
+        }
+        r.data_section(None)?;
+    }
+    let mut f = r.f;
+    f.filtered_ids = r.filtered.into_iter().collect();
+    f.filtered_ids.sort_unstable();
+    f.missing_ids = r.missing.into_iter().collect();
+    f.missing_ids.sort_unstable();
+    Ok(f)
+}
+
+/// A subscription being filled.
+struct Sub {
+    msg_id: u16,
+    name: String,
+    multi_id: u8,
+    fields: Vec<(String, String)>,
+    timestamp_idx: i64,
+    row_size: usize,
+    timestamp_offset: usize,
+    rows: Vec<u8>,
+}
+
+struct Reader<'a> {
+    data: &'a [u8],
+    /// The file position, relative to the bytes' start (may be past their end).
+    pos: usize,
+    options: &'a PyulogOptions,
+    f: PyulogFile,
+    /// `_subscriptions`, in insertion order (a replaced key keeps its place).
+    subscriptions: Vec<Sub>,
+    filtered: HashSet<u16>,
+    missing: HashSet<u16>,
+}
+
+impl<'a> Reader<'a> {
+    /// `file.read(n)`: up to `n` bytes from the position, which advances by what was read.
+    fn read(&mut self, n: usize) -> &'a [u8] {
+        let data = self.data;
+        if self.pos >= data.len() {
+            return &[];
+        }
+        let end = self.pos.saturating_add(n).min(data.len());
+        let out = &data[self.pos..end];
+        self.pos = end;
+        out
+    }
+
+    fn absolute(&self) -> u64 {
+        self.options.base_offset + self.pos as u64
+    }
+
+    fn string(&self, bytes: &[u8]) -> Step<String> {
+        parse_string(bytes, self.options.strict_strings).map_err(Raise::Fatal)
+    }
+
+    fn header(&mut self) -> Result<(), PyulogError> {
+        let h = self.read(16);
+        if h.len() != 16 {
+            return Err(PyulogError::Header(
+                "Invalid file format (Header too short)",
+            ));
+        }
+        if &h[..7] != HEADER {
+            return Err(PyulogError::Header(
+                "Invalid file format (Failed to parse header)",
+            ));
+        }
+        self.f.file_version = h[7];
+        if h[7] > 1 {
+            self.print("Warning: unknown file version. Will attempt to read it anyway");
+        }
+        self.f.start_timestamp = u64::from_le_bytes(h[8..16].try_into().expect("8 bytes"));
+        Ok(())
+    }
+
+    fn print(&mut self, line: impl Into<String>) {
+        self.f.printed.push(line.into());
+    }
+
+    fn definitions(&mut self) -> Result<(), PyulogError> {
+        loop {
+            let start = self.pos;
+            let head = self.read(3);
+            if head.is_empty() {
+                return Ok(());
+            }
+            match self.definition(start, head) {
+                Ok(true) => return Ok(()),
+                Ok(false) => {}
+                Err(Raise::Fatal(e)) => return Err(e),
+                Err(Raise::Corrupt | Raise::Struct) => {
+                    if !self.f.file_corrupt {
+                        self.print("File corruption detected while reading file definitions!");
+                        self.f.file_corrupt = true;
+                    }
+                }
+            }
+        }
+    }
+
+    /// One message of the definitions section; whether the section ends there.
+    fn definition(&mut self, start: usize, head: &[u8]) -> Step<bool> {
+        if head.len() < 3 {
+            return Err(Raise::Struct);
+        }
+        let size = usize::from(u16::from_le_bytes([head[0], head[1]]));
+        let ty = head[2];
+        let body = self.read(size);
+        match ty {
+            b'I' => {
+                let (ty, key, value) = self.info(body)?;
+                set(&mut self.f.info, key, (ty, value));
+            }
+            b'M' => self.info_multiple(body)?,
+            b'F' => {
+                let format = self.format(body)?;
+                let name = format.name.clone();
+                match self.f.formats.iter_mut().find(|f| f.name == name) {
+                    Some(f) => *f = format,
+                    None => self.f.formats.push(format),
+                }
+            }
+            b'P' => {
+                let (_, key, value) = self.info(body)?;
+                set1(&mut self.f.initial_parameters, key, value);
+            }
+            b'Q' => self.default_parameter(body)?,
+            b'A' | b'L' | b'C' => {
+                self.pos = start;
+                return Ok(true);
+            }
+            b'B' => {
+                if self.absolute() != 16 + 3 + size as u64 {
+                    let at = self.absolute();
+                    self.print(format!(
+                        "Error: FLAGS_BITS message must be first message. Offset: {at}"
+                    ));
+                }
+                if size > 8 + 8 + 3 * 8 {
+                    self.print("Warning: Flags Bit message is longer than expected");
+                }
+                if body.len() < 16 + 24 {
+                    return Err(Raise::Struct);
+                }
+                self.f.compat_flags.copy_from_slice(&body[..8]);
+                self.f.incompat_flags.copy_from_slice(&body[8..16]);
+                let mut offsets: Vec<u64> = (0..3)
+                    .map(|i| {
+                        u64::from_le_bytes(body[16 + 8 * i..24 + 8 * i].try_into().expect("8"))
+                    })
+                    .collect();
+                while offsets.last() == Some(&0) {
+                    offsets.pop();
+                }
+                self.f.appended_offsets = offsets;
+                if self.f.incompat_flags[0] & !1 != 0
+                    || self.f.incompat_flags[1..].iter().any(|&b| b != 0)
+                {
+                    return Err(Raise::Fatal(PyulogError::IncompatibleFlag));
+                }
+            }
+            _ => {
+                if ty == 0 || size == 0 || size > 10000 {
+                    self.f.file_corrupt = true;
+                    // On from the next byte. (pyulog seeks back by the size it asked for:
+                    // after a short read at the end that is before this message, and it
+                    // reads the same messages again, forever.)
+                    self.pos = start + 1;
+                }
+            }
+        }
+        Ok(false)
+    }
+
+    /// `_MessageInfo`: (type, key, value).
+    fn info(&self, data: &[u8]) -> Step<(String, String, PyValue)> {
+        let key_len = usize::from(*data.first().ok_or(Raise::Struct)?);
+        let type_key = self.string(slice(data, 1, 1 + key_len))?;
+        let mut split = type_key.split(' ');
+        let ty = split.next().unwrap_or_default().to_owned();
+        let key = split.next().ok_or(Raise::Corrupt)?.to_owned();
+        let raw = slice(data, 1 + key_len, data.len());
+        let value = if ty.starts_with("char[") {
+            PyValue::Str(self.string(raw)?)
+        } else if let Some(size) = basic_size(&ty) {
+            if raw.len() != size {
+                return Err(Raise::Struct);
+            }
+            unpack(&ty, raw)
+        } else {
+            PyValue::Bytes(raw.to_vec())
+        };
+        Ok((ty, key, value))
+    }
+
+    fn info_multiple(&mut self, data: &[u8]) -> Step<()> {
+        let continued = *data.first().ok_or(Raise::Struct)? != 0;
+        let (ty, key, value) = self.info(&data[1..])?;
+        match self.f.info_multiple.iter_mut().find(|m| m.0 == key) {
+            Some(m) => {
+                if continued {
+                    m.2.last_mut().expect("never empty").push(value);
+                } else {
+                    m.2.push(vec![value]);
+                }
+            }
+            None => self.f.info_multiple.push((key, ty, vec![vec![value]])),
+        }
+        Ok(())
+    }
+
+    fn default_parameter(&mut self, data: &[u8]) -> Step<()> {
+        let mut bits = *data.first().ok_or(Raise::Struct)?;
+        let (_, key, value) = self.info(&data[1..])?;
+        while bits != 0 {
+            // pyulog's key: the lowest set bit's value less one (bits 0, 1, 2 give 0, 1, 3).
+            let key_of_bit = (bits & bits.wrapping_neg()) - 1;
+            bits &= bits - 1;
+            let k = match self
+                .f
+                .default_parameters
+                .iter()
+                .position(|d| d.0 == key_of_bit)
+            {
+                Some(k) => k,
+                None => {
+                    self.f.default_parameters.push((key_of_bit, Vec::new()));
+                    self.f.default_parameters.len() - 1
+                }
+            };
+            set1(
+                &mut self.f.default_parameters[k].1,
+                key.clone(),
+                value.clone(),
+            );
+        }
+        Ok(())
+    }
+
+    fn format(&self, data: &[u8]) -> Step<Format> {
+        let text = self.string(data)?;
+        let mut parts = text.split(':');
+        let name = parts.next().unwrap_or_default().to_owned();
+        let body = parts.next().ok_or(Raise::Corrupt)?;
+        let mut fields = Vec::new();
+        for t in body.split(';').filter(|t| !t.is_empty()) {
+            let mut split = t.split(' ');
+            let type_str = split.next().unwrap_or_default();
+            let field = split.next().ok_or(Raise::Corrupt)?.to_owned();
+            match type_str.find('[') {
+                None => fields.push((type_str.to_owned(), 0, field)),
+                Some(a) => {
+                    // Python's `type_str[a+1:b]`, `b` -1 when there is no `]`.
+                    let b = type_str
+                        .find(']')
+                        .map_or(type_str.len().saturating_sub(1) as isize, |b| b as isize);
+                    let inner = if (a as isize + 1) < b {
+                        &type_str[a + 1..b as usize]
+                    } else {
+                        ""
+                    };
+                    let n = python_int(inner).ok_or(Raise::Corrupt)?;
+                    if !(0..=0xFFFF).contains(&n) {
+                        return Err(Raise::Corrupt);
+                    }
+                    fields.push((type_str[..a].to_owned(), n as u32, field));
+                }
+            }
+        }
+        Ok(Format { name, fields })
+    }
+
+    fn data_section(&mut self, until: Option<u64>) -> Result<(), PyulogError> {
+        let until = until.unwrap_or(1 << 50);
+        let mut curr = self.absolute();
+        loop {
+            let start = self.pos;
+            let head = self.read(3);
+            curr += head.len() as u64;
+            if head.len() < 3 {
+                break;
+            }
+            let size = usize::from(u16::from_le_bytes([head[0], head[1]]));
+            let ty = head[2];
+            let body = self.read(size);
+            curr += body.len() as u64;
+            if body.len() < size {
+                break;
+            }
+            if curr > until {
+                break;
+            }
+            match self.data_message(start, ty, body, &mut curr) {
+                Ok(()) => {}
+                Err(Raise::Fatal(e)) => return Err(e),
+                Err(Raise::Struct) => break,
+                Err(Raise::Corrupt) => {
+                    if !self.f.file_corrupt {
+                        self.print("File corruption detected while reading file data!");
+                        self.f.file_corrupt = true;
+                    }
+                }
+            }
+        }
+        // Each subscription with rows is a dataset, the last subscribed first; then all
+        // datasets by name and instance (a stable sort).
+        while let Some(s) = self.subscriptions.pop() {
+            if !s.rows.is_empty() {
+                self.f.data.push(Dataset {
+                    name: s.name,
+                    multi_id: s.multi_id,
+                    msg_id: s.msg_id,
+                    fields: s.fields,
+                    timestamp_idx: s.timestamp_idx,
+                    rows: s.rows,
+                    row_size: s.row_size,
+                });
+            }
+        }
+        self.f
+            .data
+            .sort_by(|a, b| (&a.name, a.multi_id).cmp(&(&b.name, b.multi_id)));
+        Ok(())
+    }
+
+    fn data_message(&mut self, start: usize, ty: u8, body: &[u8], curr: &mut u64) -> Step<()> {
+        match ty {
+            b'D' => self.row(body)?,
+            b'I' => {
+                let (ty, key, value) = self.info(body)?;
+                set(&mut self.f.info, key, (ty, value));
+            }
+            b'M' => self.info_multiple(body)?,
+            b'P' => {
+                let (_, key, value) = self.info(body)?;
+                self.f
+                    .changed_parameters
+                    .push((self.f.last_timestamp, key, value));
+            }
+            b'Q' => self.default_parameter(body)?,
+            b'A' => self.subscribe(body)?,
+            b'L' => {
+                if body.len() < 9 {
+                    return Err(Raise::Struct);
+                }
+                let message = self.string(&body[9..])?;
+                self.f.logged.push(Logged {
+                    level: body[0],
+                    timestamp: u64::from_le_bytes(body[1..9].try_into().expect("8")),
+                    message,
+                });
+            }
+            b'C' => {
+                if body.len() < 11 {
+                    return Err(Raise::Struct);
+                }
+                let tag = u16::from_le_bytes([body[1], body[2]]);
+                let t = Tagged {
+                    level: body[0],
+                    tag,
+                    timestamp: u64::from_le_bytes(body[3..11].try_into().expect("8")),
+                    message: self.string(&body[11..])?,
+                };
+                match self.f.tagged.iter_mut().find(|g| g.0 == tag) {
+                    Some(g) => g.1.push(t),
+                    None => self.f.tagged.push((tag, vec![t])),
+                }
+            }
+            b'O' => {
+                if body.len() != 2 {
+                    return Err(Raise::Struct);
+                }
+                let duration = u16::from_le_bytes([body[0], body[1]]);
+                self.f.dropouts.push((duration, self.f.last_timestamp));
+            }
+            b'S' => self.f.sync_seq_cnt += 1,
+            _ => {
+                let size = body.len();
+                if ty == 0 || size == 0 || size > 10000 {
+                    self.f.file_corrupt = true;
+                    self.pos = start + 1;
+                    *curr = self.absolute();
+                    if self.f.has_sync {
+                        self.find_sync(None);
+                    }
+                } else if self.f.has_sync {
+                    self.find_sync(Some(size));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// `_find_sync`: the position after the next sync sequence (in the `last` bytes just
+    /// read, or in the rest of the file), or where it was.
+    fn find_sync(&mut self, last: Option<usize>) {
+        let from = match last {
+            Some(n) => self.pos - n,
+            None => self.pos,
+        };
+        let end = match last {
+            Some(_) => self.pos.min(self.data.len()),
+            None => self.data.len(),
+        };
+        let found = (from < end && end - from >= SYNC.len())
+            .then(|| {
+                self.data[from..end]
+                    .windows(SYNC.len())
+                    .position(|w| w == SYNC)
+            })
+            .flatten();
+        match found {
+            Some(i) => {
+                self.pos = from + i + SYNC.len();
+                self.f.file_corrupt = true;
+            }
+            None => {
+                if last.is_none() {
+                    self.f.has_sync = false;
+                }
+            }
+        }
+    }
+
+    fn subscribe(&mut self, data: &[u8]) -> Step<()> {
+        if data.len() < 3 {
+            return Err(Raise::Struct);
+        }
+        let multi_id = data[0];
+        let msg_id = u16::from_le_bytes([data[1], data[2]]);
+        let name = self.string(&data[3..])?;
+        let mut fields = Vec::new();
+        let mut timestamp_idx = -1;
+        self.flatten("", &name, &mut fields, &mut timestamp_idx, 0)?;
+        while fields
+            .last()
+            .is_some_and(|f: &(String, String)| f.0.starts_with("_padding"))
+        {
+            fields.pop();
+        }
+        // numpy refuses two fields of one name.
+        let mut names = HashSet::with_capacity(fields.len());
+        if !fields.iter().all(|f| names.insert(f.0.as_str())) {
+            return Err(Raise::Corrupt);
+        }
+        let size = |f: &(String, String)| basic_size(&f.1).expect("basic");
+        let timestamp_offset = fields
+            .iter()
+            .take_while(|f| f.0 != "timestamp")
+            .map(size)
+            .sum();
+        let row_size = fields.iter().map(size).sum();
+        if self.options.filter.keeps(&name) {
+            let sub = Sub {
+                msg_id,
+                name,
+                multi_id,
+                fields,
+                timestamp_idx,
+                row_size,
+                timestamp_offset,
+                rows: Vec::new(),
+            };
+            match self.subscriptions.iter_mut().find(|s| s.msg_id == msg_id) {
+                Some(s) => *s = sub,
+                None => self.subscriptions.push(sub),
+            }
+        } else {
+            self.filtered.insert(msg_id);
+        }
+        Ok(())
+    }
+
+    fn flatten(
+        &self,
+        prefix: &str,
+        type_name: &str,
+        out: &mut Vec<(String, String)>,
+        timestamp_idx: &mut i64,
+        depth: usize,
+    ) -> Step<()> {
+        if depth > MAX_DEPTH {
+            return Err(Raise::Fatal(PyulogError::Recursion(type_name.to_owned())));
+        }
+        let format = self
+            .f
+            .formats
+            .iter()
+            .find(|f| f.name == type_name)
+            .ok_or(Raise::Corrupt)?;
+        for (ty, n, field) in &format.fields {
+            if out.len() > MAX_FIELDS {
+                return Err(Raise::Corrupt);
+            }
+            if basic_size(ty).is_some() {
+                if *n > 0 {
+                    for i in 0..*n {
+                        out.push((format!("{prefix}{field}[{i}]"), ty.clone()));
+                    }
+                } else {
+                    out.push((format!("{prefix}{field}"), ty.clone()));
+                }
+                if prefix.is_empty() && field == "timestamp" {
+                    *timestamp_idx = out.len() as i64 - 1;
+                }
+            } else if *n > 0 {
+                for i in 0..*n {
+                    self.flatten(
+                        &format!("{prefix}{field}[{i}]."),
+                        ty,
+                        out,
+                        timestamp_idx,
+                        depth + 1,
+                    )?;
+                }
+            } else {
+                self.flatten(
+                    &format!("{prefix}{field}."),
+                    ty,
+                    out,
+                    timestamp_idx,
+                    depth + 1,
+                )?;
+            }
+        }
+        Ok(())
+    }
+
+    #[inline]
+    fn row(&mut self, body: &[u8]) -> Step<()> {
+        if body.len() < 2 {
+            return Err(Raise::Struct);
+        }
+        let msg_id = u16::from_le_bytes([body[0], body[1]]);
+        let Some(sub) = self.subscriptions.iter_mut().find(|s| s.msg_id == msg_id) else {
+            if !self.filtered.contains(&msg_id) {
+                if self.missing.insert(msg_id) {
+                    self.f.printed.push(format!(
+                        "Warning: no subscription found for message id {msg_id}. Continuing, \
+                         but file is most likely corrupt"
+                    ));
+                }
+                self.f.file_corrupt = true;
+            }
+            return Ok(());
+        };
+        let row = &body[2..];
+        if row.len() != sub.row_size {
+            self.f.file_corrupt = true;
+            return Ok(());
+        }
+        sub.rows.extend_from_slice(row);
+        let t = row
+            .get(sub.timestamp_offset..sub.timestamp_offset + 8)
+            .ok_or(Raise::Struct)?;
+        let t = u64::from_le_bytes(t.try_into().expect("8"));
+        if t > self.f.last_timestamp {
+            self.f.last_timestamp = t;
+        }
+        Ok(())
+    }
+}
+
+/// `data[a:b]` as Python slices it.
+fn slice(data: &[u8], a: usize, b: usize) -> &[u8] {
+    let a = a.min(data.len());
+    &data[a..b.clamp(a, data.len())]
+}
+
+/// Sets a dict entry (a key keeps its first place).
+fn set(dict: &mut Vec<(String, String, PyValue)>, key: String, (ty, value): (String, PyValue)) {
+    match dict.iter_mut().find(|e| e.0 == key) {
+        Some(e) => {
+            e.1 = ty;
+            e.2 = value;
+        }
+        None => dict.push((key, ty, value)),
+    }
+}
+
+fn set1(dict: &mut Vec<(String, PyValue)>, key: String, value: PyValue) {
+    match dict.iter_mut().find(|e| e.0 == key) {
+        Some(e) => e.1 = value,
+        None => dict.push((key, value)),
+    }
+}
+
+/// `struct.unpack` of a basic type of exactly its size.
+fn unpack(ty: &str, b: &[u8]) -> PyValue {
+    macro_rules! le {
+        ($t:ty) => {
+            <$t>::from_le_bytes(b.try_into().expect("sized"))
+        };
+    }
+    match ty {
+        "int8_t" => PyValue::Int(i64::from(b[0] as i8)),
+        "uint8_t" => PyValue::UInt(u64::from(b[0])),
+        "int16_t" => PyValue::Int(i64::from(le!(i16))),
+        "uint16_t" => PyValue::UInt(u64::from(le!(u16))),
+        "int32_t" => PyValue::Int(i64::from(le!(i32))),
+        "uint32_t" => PyValue::UInt(u64::from(le!(u32))),
+        "int64_t" => PyValue::Int(le!(i64)),
+        "uint64_t" => PyValue::UInt(le!(u64)),
+        "float" => PyValue::Float(f64::from(le!(f32))),
+        "double" => PyValue::Float(le!(f64)),
+        "bool" => PyValue::Bool(b[0] != 0),
+        _ => PyValue::Bytes(b.to_vec()),
+    }
+}
+
+/// Python's `int(text)` of a base-10 literal: spaces around, a sign, digits with single
+/// underscores between them.
+fn python_int(text: &str) -> Option<i64> {
+    let t = text.trim_matches(|c: char| c.is_whitespace());
+    let (neg, digits) = match t.as_bytes().first() {
+        Some(b'-') => (true, &t[1..]),
+        Some(b'+') => (false, &t[1..]),
+        _ => (false, t),
+    };
+    if digits.is_empty()
+        || digits.starts_with('_')
+        || digits.ends_with('_')
+        || digits.contains("__")
+        || !digits.chars().all(|c| c.is_ascii_digit() || c == '_')
+    {
+        return None;
+    }
+    let n: i64 = digits.replace('_', "").parse().ok()?;
+    Some(if neg { -n } else { n })
+}
+
+/// pyulog's `parse_string`: UTF-8, invalid bytes left out (or an error when strict).
+pub fn parse_string(bytes: &[u8], strict: bool) -> Result<String, PyulogError> {
+    match std::str::from_utf8(bytes) {
+        Ok(s) => Ok(s.to_owned()),
+        Err(e) if strict => {
+            let start = e.valid_up_to();
+            let (end, reason) = match e.error_len() {
+                None => (bytes.len(), "unexpected end of data"),
+                Some(n) => {
+                    let b = bytes[start];
+                    let start_byte = matches!(b, 0xC2..=0xF4);
+                    (
+                        start + n,
+                        if start_byte {
+                            "invalid continuation byte"
+                        } else {
+                            "invalid start byte"
+                        },
+                    )
+                }
+            };
+            Err(PyulogError::Unicode {
+                bytes: bytes.to_vec(),
+                start,
+                end,
+                reason,
+            })
+        }
+        Err(_) => Ok(bytes.utf8_chunks().map(|c| c.valid()).collect()),
+    }
+}
+
+#[cfg(test)]
+mod tests;
