@@ -38,6 +38,8 @@ extern crate self as ulog_runtime;
 #[doc(hidden)]
 pub mod __private;
 pub mod analysis;
+#[cfg(feature = "cli")]
+pub mod cli;
 #[cfg(feature = "codegen")]
 pub mod codegen;
 pub mod columns;

@@ -11,9 +11,8 @@
 //! or field it lacks, a version that logs it otherwise) is absent (`null`, or an empty
 //! list) and [`Analysis::missing`] says why; nothing fails for it.
 //!
-//! Each concern is its own file, a consumer of the same rows: [`state`] (armed, in air,
-//! mode), [`modes`], [`motion`], [`sensors`], [`fields`], [`params`], [`diagnostics`],
-//! [`spectral`].
+//! Each concern is its own file, a consumer of the same rows: `state` (armed, in air,
+//! mode), `modes`, `motion`, `sensors`, `fields`, `params`, [`diagnostics`], `spectral`.
 //!
 //! ```no_run
 //! # fn main() -> Result<(), ulog_runtime::ReadError> {

@@ -35,7 +35,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-mod anonymize;
+pub mod anonymize;
 mod fields;
 #[cfg(test)]
 mod tests;

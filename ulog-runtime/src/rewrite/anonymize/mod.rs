@@ -16,8 +16,8 @@
 //!   zeros, and topics of raw bytes that embed positions (receiver traffic, corrections,
 //!   streams) are dropped.
 //!
-//! [`rules`] lists every field, topic, key and parameter; geometry and dates are in
-//! [`geo`], free text in [`text`].
+//! `rules` lists every field, topic, key and parameter; geometry and dates are in
+//! `geo`, free text in `text`.
 
 mod geo;
 mod rules;

@@ -4,9 +4,9 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use ulog_runtime::tools::{GpsDumpError, gps_dump};
+use crate::tools::{GpsDumpError, gps_dump};
 
-use crate::Failure;
+use crate::cli::Failure;
 
 /// `ulog gps-dump FILE [-o DIR] [-i INSTANCE] [-x]`.
 #[derive(clap::Args)]
@@ -34,9 +34,9 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
             format!("the directory {} does not exist", dir.display()),
         ));
     }
-    let log = crate::open(&args.file)?;
-    crate::check_utf8(&log, &args.file, args.ignore)?;
-    crate::pyulog_warnings(&log, out)?;
+    let log = crate::cli::open(&args.file)?;
+    crate::cli::check_utf8(&log, &args.file, args.ignore)?;
+    crate::cli::pyulog_warnings(&log, out)?;
     let dump = match gps_dump(&log, args.instance) {
         Ok(d) => d,
         Err(GpsDumpError::NoGpsDump) => {
@@ -54,7 +54,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         Err(e) => return Err(Failure::at(&args.file, e)),
     };
     // pyulog's names: the log's file name without `.ulg`, in the output folder.
-    let stem = ulog_runtime::file_names::log_stem(&args.file);
+    let stem = crate::file_names::log_stem(&args.file);
     let prefix = match &args.output {
         Some(dir) => dir.join(&stem).display().to_string(),
         None => stem,

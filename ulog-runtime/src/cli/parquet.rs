@@ -6,10 +6,10 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use ulog_runtime::columns::Window;
-use ulog_runtime::columns::parquet::{Converter, Layout, ParquetOptions};
+use crate::columns::Window;
+use crate::columns::parquet::{Converter, Layout, ParquetOptions};
 
-use crate::Failure;
+use crate::cli::Failure;
 
 /// `ulog parquet FILE... -o DIR [-m a,b] [--start S --end S] [--layout hive] [-j N]
 /// [--no-analysis] [--buffer-mb N]`.
@@ -72,7 +72,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     options
         .properties(Vec::new())
         .map_err(|e| Failure::exit(2, format!("--zstd-level {}: {e}", args.zstd_level)))?;
-    crate::check_topics_in_files(&args.files, &args.messages)?;
+    crate::cli::check_topics_in_files(&args.files, &args.messages)?;
     let total: u64 = args
         .files
         .iter()
@@ -115,7 +115,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
                 for note in &c.notes {
                     eprintln!("ulog: {}: {note}", path.display());
                 }
-                crate::report_skipped(
+                crate::cli::report_skipped(
                     &c.skipped,
                     path,
                     &args.messages,
@@ -125,7 +125,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
             }
             Err(e) => {
                 failed += 1;
-                match crate::check_path(path, false) {
+                match crate::cli::check_path(path, false) {
                     Err(plain) => eprintln!("ulog: {}", plain.text()),
                     Ok(()) => eprintln!("ulog: {e}"),
                 }

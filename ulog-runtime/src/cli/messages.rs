@@ -5,9 +5,9 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use serde::Serialize;
-use ulog_runtime::events::{MessageKind, MessageLine, messages};
+use crate::events::{MessageKind, MessageLine, messages};
 
-use crate::Failure;
+use crate::cli::Failure;
 
 /// `ulog messages FILE [-i] [--json]`.
 #[derive(clap::Args)]
@@ -25,8 +25,8 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
-    let log = crate::open(&args.file)?;
-    crate::check_utf8(&log, &args.file, args.ignore)?;
+    let log = crate::cli::open(&args.file)?;
+    crate::cli::check_utf8(&log, &args.file, args.ignore)?;
     let m = messages(&log);
     for note in &m.notes {
         eprintln!("ulog: {}: {note}", args.file.display());

@@ -9,11 +9,11 @@ use std::path::PathBuf;
 
 use serde::Serialize;
 use serde::ser::SerializeSeq;
-use ulog_runtime::document::LogFacts;
-use ulog_runtime::read::Subscription;
-use ulog_runtime::{Log, Value};
+use crate::document::LogFacts;
+use crate::read::Subscription;
+use crate::{Log, Value};
 
-use crate::Failure;
+use crate::cli::Failure;
 
 /// `ulog json FILE [-m a,b] [--document]`.
 #[derive(clap::Args)]
@@ -32,8 +32,8 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
-    let log = crate::open(&args.file)?;
-    crate::check_topics(&log, &args.file, &args.messages)?;
+    let log = crate::cli::open(&args.file)?;
+    crate::cli::check_topics(&log, &args.file, &args.messages)?;
     if args.document {
         serde_json::to_writer_pretty(&mut *out, &Document::new(&log, &args.messages))?;
         out.write_all(b"\n")?;

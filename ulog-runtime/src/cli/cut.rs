@@ -4,10 +4,10 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use ulog_runtime::columns::Window;
-use ulog_runtime::rewrite::Rewrite;
+use crate::columns::Window;
+use crate::rewrite::Rewrite;
 
-use crate::Failure;
+use crate::cli::Failure;
 
 /// `ulog cut FILE -o OUT [--start S] [--end E] [-m a,b] [--exclude c,d]`.
 #[derive(clap::Args)]
@@ -32,14 +32,14 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
-    crate::check_path(&args.file, false)?;
+    crate::cli::check_path(&args.file, false)?;
     let topics: Vec<String> = args.messages.iter().chain(&args.exclude).cloned().collect();
-    crate::check_topics_in_files(std::slice::from_ref(&args.file), &topics)?;
+    crate::cli::check_topics_in_files(std::slice::from_ref(&args.file), &topics)?;
     let report = Rewrite::new()
         .window(Window::seconds(args.start, args.end))
         .topics(&args.messages)
         .exclude(&args.exclude)
         .run_file(&args.file, &args.output)
         .map_err(|e| Failure::at(&args.file, e))?;
-    crate::report_rewrite(&report, &args.output, out)
+    crate::cli::report_rewrite(&report, &args.output, out)
 }

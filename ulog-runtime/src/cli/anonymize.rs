@@ -4,9 +4,9 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use ulog_runtime::rewrite::{Anonymize, Rewrite, Target};
+use crate::rewrite::{Anonymize, Rewrite, Target};
 
-use crate::Failure;
+use crate::cli::Failure;
 
 /// `ulog anonymize FILE -o OUT [--origin LAT,LON | --seed N] [--keep-time]`.
 #[derive(clap::Args)]
@@ -34,7 +34,7 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
-    crate::check_path(&args.file, false)?;
+    crate::cli::check_path(&args.file, false)?;
     let target = match (&args.origin, args.seed) {
         (Some(text), _) => {
             let parsed = text.split_once(',').and_then(|(a, b)| {
@@ -62,7 +62,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         })
         .run_file(&args.file, &args.output)
         .map_err(|e| Failure::at(&args.file, e))?;
-    crate::report_rewrite(&report, &args.output, out)
+    crate::cli::report_rewrite(&report, &args.output, out)
 }
 
 /// A seed nobody chose: from the process's randomly keyed hasher.

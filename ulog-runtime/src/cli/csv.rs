@@ -3,10 +3,10 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use ulog_runtime::columns::Window;
-use ulog_runtime::columns::csv::{CsvOptions, export};
+use crate::columns::Window;
+use crate::columns::csv::{CsvOptions, export};
 
-use crate::{Failure, Progress};
+use crate::cli::{Failure, Progress};
 
 /// `ulog csv FILE [-m a,b] [-o DIR] [-d ;] [--start S --end S]`.
 #[derive(clap::Args)]
@@ -35,9 +35,9 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
-    let log = crate::open(&args.file)?;
-    crate::check_utf8(&log, &args.file, args.ignore)?;
-    crate::check_topics(&log, &args.file, &args.messages)?;
+    let log = crate::cli::open(&args.file)?;
+    crate::cli::check_utf8(&log, &args.file, args.ignore)?;
+    crate::cli::check_topics(&log, &args.file, &args.messages)?;
     let options = CsvOptions {
         delimiter: args.delimiter.clone(),
         window: Window::seconds(args.start, args.end),
@@ -49,7 +49,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         }
         None => args.file.parent().map(Path::to_owned).unwrap_or_default(),
     };
-    let stem = ulog_runtime::file_names::log_stem(&args.file);
+    let stem = crate::file_names::log_stem(&args.file);
     let mut progress = Progress::new(log.row_count(), log.bytes().len());
     let written = export(&log, &stem, &dir, &args.messages, &options, &mut || {
         progress.add(1);
@@ -71,7 +71,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     for f in &written {
         writeln!(out, "{} ({} rows)", f.path.display(), f.rows)?;
     }
-    crate::report_skipped(
+    crate::cli::report_skipped(
         &log.skipped(),
         &args.file,
         &args.messages,

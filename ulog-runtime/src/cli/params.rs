@@ -4,9 +4,9 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use ulog_runtime::tools::{DefaultKind, ParamsFormat, ParamsOptions, params};
+use crate::tools::{DefaultKind, ParamsFormat, ParamsOptions, params};
 
-use crate::Failure;
+use crate::cli::Failure;
 
 /// `ulog params FILE [OUTPUT] [-f csv|octave|qgc] [-i] [-c] [-t] [-l ,] [-d ...] [--ignore]`.
 #[derive(clap::Args)]
@@ -47,9 +47,9 @@ enum FormatArg {
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
-    let log = crate::open(&args.file)?;
-    crate::check_utf8(&log, &args.file, args.ignore)?;
-    crate::pyulog_warnings(&log, out)?;
+    let log = crate::cli::open(&args.file)?;
+    crate::cli::check_utf8(&log, &args.file, args.ignore)?;
+    crate::cli::pyulog_warnings(&log, out)?;
     let options = ParamsOptions {
         format: match args.format {
             FormatArg::Csv => ParamsFormat::Csv,
@@ -74,7 +74,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
                 .map_err(|e| Failure::at(path, e))
         }
         None => params(&log, &options, out).map_err(|e| match e {
-            ulog_runtime::tools::ParamsError::Io(io) => Failure::from(io),
+            crate::tools::ParamsError::Io(io) => Failure::from(io),
             other => Failure::at(&args.file, other),
         }),
     }

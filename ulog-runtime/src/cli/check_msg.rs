@@ -3,9 +3,9 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use ulog_runtime::codegen::msg::{FormatCheck, MsgSet};
+use crate::codegen::msg::{FormatCheck, MsgSet};
 
-use crate::Failure;
+use crate::cli::Failure;
 
 /// `ulog check-msg DIR FILE`.
 #[derive(clap::Args)]
@@ -24,9 +24,9 @@ pub(crate) struct Args {
 /// `N/M formats identical`; exit 0 only when all M formats the folder defines are identical
 /// and M > 0, else 1.
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
-    crate::check_path(&args.dir, true)?;
+    crate::cli::check_path(&args.dir, true)?;
     let set = MsgSet::read_dir(&args.dir).map_err(|e| Failure::from(e.to_string()))?;
-    let log = crate::open(&args.file)?;
+    let log = crate::cli::open(&args.file)?;
     let check = set.check(log.metadata().schema());
     let file_name = |i: usize| {
         set.files()[i]

@@ -6,10 +6,10 @@ use std::path::Path;
 
 use std::path::PathBuf;
 
-use ulog_runtime::{Log, Value};
+use crate::{Log, Value};
 
-use crate::Failure;
-use ulog_runtime::pytext::{f32_text, f64_text};
+use crate::cli::Failure;
+use crate::pytext::{f32_text, f64_text};
 
 /// `ulog info FILE [-v] [-m NAME [-n]] [-i]`.
 #[derive(clap::Args)]
@@ -33,11 +33,11 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
-    let log = crate::open(&args.file)?;
-    crate::check_utf8(&log, &args.file, args.ignore)?;
+    let log = crate::cli::open(&args.file)?;
+    crate::cli::check_utf8(&log, &args.file, args.ignore)?;
     if let Some(name) = &args.message {
-        crate::pyulog_warnings(&log, out)?;
-        match ulog_runtime::tools::multi_info_text(log.metadata(), name, args.newline) {
+        crate::cli::pyulog_warnings(&log, out)?;
+        match crate::tools::multi_info_text(log.metadata(), name, args.newline) {
             Some(text) => out.write_all(text.as_bytes())?,
             None => writeln!(out, "message {name} not found")?,
         }
@@ -60,8 +60,8 @@ fn plain(v: &Value) -> String {
     }
     match v {
         Value::String(s) => s.clone(),
-        Value::Scalar(ulog_runtime::Scalar::Float(x)) => f32_text(*x),
-        Value::Scalar(ulog_runtime::Scalar::Double(x)) => f64_text(*x),
+        Value::Scalar(crate::Scalar::Float(x)) => f32_text(*x),
+        Value::Scalar(crate::Scalar::Double(x)) => f64_text(*x),
         other => other.to_string(),
     }
 }
@@ -79,8 +79,8 @@ fn binary(parts: &[Value]) -> Option<Vec<u8>> {
         };
         for item in items {
             match item.as_scalar()? {
-                ulog_runtime::Scalar::UInt8(b) => bytes.push(b),
-                ulog_runtime::Scalar::Int8(b) => bytes.push(b as u8),
+                crate::Scalar::UInt8(b) => bytes.push(b),
+                crate::Scalar::Int8(b) => bytes.push(b as u8),
                 _ => return None,
             }
         }

@@ -3,9 +3,9 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use ulog_runtime::tools::{KmlOptions, kml};
+use crate::tools::{KmlOptions, kml};
 
-use crate::Failure;
+use crate::cli::Failure;
 
 /// `ulog kml FILE [-o track.kml] [--topic T] [--camera-trigger T] [-i]`.
 #[derive(clap::Args)]
@@ -29,9 +29,9 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
-    let log = crate::open(&args.file)?;
-    crate::check_utf8(&log, &args.file, args.ignore)?;
-    crate::pyulog_warnings(&log, out)?;
+    let log = crate::cli::open(&args.file)?;
+    crate::cli::check_utf8(&log, &args.file, args.ignore)?;
+    crate::cli::pyulog_warnings(&log, out)?;
     let options = KmlOptions {
         topic: args.topic.clone(),
         camera_trigger: args.camera_trigger.clone(),

@@ -1,13 +1,16 @@
-//! `ulog`: inspect, export and generate from PX4 ULog files, with pyulog's tools' options
-//! and output. One file per verb, each a thin layer over library calls; this file holds
-//! what they share: opening logs, checking topic names, errors, progress.
+//! The `ulog` command-line tool (feature `cli`): inspect, export and generate from PX4 ULog
+//! files, with pyulog's tools' options and output. [`main`] runs it on a list of arguments
+//! (the `ulog` binary and the Python package's `ulog` command are one line over it). One
+//! file per verb, each a thin layer over library calls; this file holds what they share:
+//! opening logs, checking topic names, errors, progress. The verbs' doc comments are
+//! clap's help text.
 
+use std::ffi::OsString;
 use std::io::{self, IsTerminal, Write};
 use std::path::{Path, PathBuf};
-use std::process::ExitCode;
 
+use crate::Log;
 use clap::{Parser, Subcommand};
-use ulog_runtime::Log;
 
 mod analyze;
 mod anonymize;
@@ -52,7 +55,7 @@ enum Command {
     /// Rows as JSON Lines (one object per row), or one JSON document.
     Json(json::Args),
     /// Rust types for a log's formats (several logs: one type per topic that reads them
-    /// all), or for a folder of PX4 `.msg` files, as `ulog_runtime::codegen` makes them.
+    /// all), or for a folder of PX4 `.msg` files, as `crate::codegen` makes them.
     Codegen(codegen::Args),
     /// Whether the `.msg` files of a folder make exactly a log's formats, and where not.
     CheckMsg(check_msg::Args),
@@ -123,7 +126,7 @@ impl Failure {
 
 /// pyulog's spellings of options that clap cannot take as they are: `-ts`/`-te` (ulog2csv's
 /// time window) become `--start`/`--end`.
-fn pyulog_aliases(args: impl Iterator<Item = std::ffi::OsString>) -> Vec<std::ffi::OsString> {
+fn pyulog_aliases(args: impl Iterator<Item = OsString>) -> Vec<OsString> {
     args.map(|a| match a.to_str() {
         Some("-ts") => "--start".into(),
         Some("-te") => "--end".into(),
@@ -132,19 +135,31 @@ fn pyulog_aliases(args: impl Iterator<Item = std::ffi::OsString>) -> Vec<std::ff
     .collect()
 }
 
-fn main() -> ExitCode {
-    let cli = Cli::parse_from(pyulog_aliases(std::env::args_os()));
+/// Runs `ulog` with `args` (the first is the program's name, as `std::env::args_os` gives
+/// it): its output on stdout, errors on stderr; returns the exit code (0 success, 1 a
+/// failure, 2 a usage error; `--help` and `--version` print and return 0). Never exits the
+/// process.
+pub fn main(args: impl IntoIterator<Item = impl Into<OsString>>) -> u8 {
+    let args = pyulog_aliases(args.into_iter().map(Into::into));
+    let cli = match Cli::try_parse_from(args) {
+        Ok(cli) => cli,
+        Err(e) => {
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let _ = e.print();
+            return code;
+        }
+    };
     let stdout = io::stdout();
     let mut out = io::BufWriter::new(stdout.lock());
     let result = run(cli.command, &mut out).and_then(|()| out.flush().map_err(Failure::from));
     match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(Failure {
+        Ok(())
+        | Err(Failure {
             broken_pipe: true, ..
-        }) => ExitCode::SUCCESS,
+        }) => 0,
         Err(failure) => {
             eprintln!("ulog: {}", failure.text());
-            ExitCode::from(failure.code)
+            failure.code
         }
     }
 }
@@ -170,7 +185,7 @@ fn run(command: Command, out: &mut impl Write) -> Result<(), Failure> {
 
 /// What `ulog cut` and `ulog anonymize` print: the new log, then the report.
 pub(crate) fn report_rewrite(
-    report: &ulog_runtime::rewrite::Report,
+    report: &crate::rewrite::Report,
     output: &Path,
     out: &mut impl Write,
 ) -> Result<(), Failure> {
@@ -183,7 +198,7 @@ pub(crate) fn report_rewrite(
 pub(crate) fn open(path: &Path) -> Result<Log<'static>, Failure> {
     check_path(path, false)?;
     Log::open(path).map_err(|e| match e {
-        ulog_runtime::ReadError::Io(io) => Failure::at(path, plain_io(&io, false)),
+        crate::ReadError::Io(io) => Failure::at(path, plain_io(&io, false)),
         other => Failure::at(path, other),
     })
 }
@@ -212,7 +227,7 @@ fn plain_io(e: &io::Error, folder: bool) -> String {
 /// Prints what pyulog prints while it reads (its warnings), as the verbs that mirror a
 /// pyulog tool do before their output.
 pub(crate) fn pyulog_warnings(log: &Log<'_>, out: &mut impl Write) -> Result<(), Failure> {
-    for w in ulog_runtime::tools::pyulog_warnings(log) {
+    for w in crate::tools::pyulog_warnings(log) {
         writeln!(out, "{w}")?;
     }
     Ok(())
@@ -261,7 +276,7 @@ pub(crate) fn check_topics_in_files(files: &[PathBuf], topics: &[String]) -> Res
             let file = std::io::BufReader::new(std::fs::File::open(path).ok()?);
             Some((
                 path,
-                ulog_runtime::StreamReader::read_definitions(file).ok()?,
+                crate::StreamReader::read_definitions(file).ok()?,
             ))
         })
         .collect();
@@ -304,12 +319,12 @@ pub(crate) fn did_you_mean(names: &[String]) -> String {
     if names.is_empty() {
         return " (`ulog info FILE` lists its topics)".to_owned();
     }
-    ulog_runtime::schema::did_you_mean(names)
+    crate::schema::did_you_mean(names)
 }
 
 /// Says on stderr what the export left out, so that nothing is skipped silently.
 pub(crate) fn report_skipped(
-    skipped: &ulog_runtime::read::Skipped,
+    skipped: &crate::read::Skipped,
     file: &Path,
     topics: &[String],
     nothing_written: Option<&str>,

@@ -3,9 +3,9 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use ulog_runtime::analysis::Analysis;
+use crate::analysis::Analysis;
 
-use crate::Failure;
+use crate::cli::Failure;
 
 /// `ulog analyze FILE... [--json]`.
 #[derive(clap::Args)]
@@ -21,7 +21,7 @@ pub(crate) struct Args {
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     for (i, path) in args.files.iter().enumerate() {
-        let log = crate::open(path)?;
+        let log = crate::cli::open(path)?;
         let analysis = Analysis::of_log(&log);
         if args.json {
             serde_json::to_writer(&mut *out, &analysis)?;

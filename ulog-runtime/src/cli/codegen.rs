@@ -1,11 +1,11 @@
-//! `ulog codegen`: the Rust types `ulog_runtime::codegen` makes for logs or `.msg` folders.
+//! `ulog codegen`: the Rust types `crate::codegen` makes for logs or `.msg` folders.
 
 use std::io::Write;
 use std::path::PathBuf;
 
-use ulog_runtime::codegen::{Builder, Merge};
+use crate::codegen::{Builder, Merge};
 
-use crate::Failure;
+use crate::cli::Failure;
 
 /// `ulog codegen FILE... [-m a,b] [--msg-dir DIR] [--strict | --widest]`.
 #[derive(clap::Args)]
@@ -36,7 +36,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     let topics: Vec<&str> = args.messages.iter().map(String::as_str).collect();
     let mut builder = Builder::new();
     for file in &args.files {
-        let log = crate::open(file)?;
+        let log = crate::cli::open(file)?;
         // `-m` selects from the inputs that have the topics; logs lacking one still count.
         let present: Vec<&str> = topics
             .iter()
@@ -49,7 +49,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
             && args.msg_dir.is_empty()
         {
             let missing: Vec<String> = args.messages.clone();
-            crate::check_topics(&log, file, &missing)?;
+            crate::cli::check_topics(&log, file, &missing)?;
         }
         if topics.is_empty() {
             builder.ulog(file);
@@ -58,7 +58,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         }
     }
     for dir in &args.msg_dir {
-        crate::check_path(dir, true)?;
+        crate::cli::check_path(dir, true)?;
         if topics.is_empty() {
             builder.msg_dir(dir);
         } else {

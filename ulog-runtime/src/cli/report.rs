@@ -4,9 +4,9 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use ulog_runtime::report::Report;
+use crate::report::Report;
 
-use crate::Failure;
+use crate::cli::Failure;
 
 /// `ulog report FILE [-o report.html]`.
 #[derive(clap::Args)]
@@ -19,7 +19,7 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
-    let log = crate::open(&args.file)?;
+    let log = crate::cli::open(&args.file)?;
     let name = args.file.file_name().map_or_else(
         || args.file.display().to_string(),
         |n| n.to_string_lossy().into_owned(),
@@ -29,7 +29,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     let path = args.output.clone().unwrap_or_else(|| {
         PathBuf::from(format!(
             "{}.html",
-            ulog_runtime::file_names::log_stem(&args.file)
+            crate::file_names::log_stem(&args.file)
         ))
     });
     std::fs::write(&path, report.html())

@@ -1,0 +1,5 @@
+//! `ulog`: the command-line tool ([`ulog_runtime::cli`]).
+
+fn main() -> std::process::ExitCode {
+    std::process::ExitCode::from(ulog_runtime::cli::main(std::env::args_os()))
+}
