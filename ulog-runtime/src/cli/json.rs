@@ -7,11 +7,11 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use serde::Serialize;
-use serde::ser::SerializeSeq;
 use crate::document::LogFacts;
 use crate::read::Subscription;
 use crate::{Log, Value};
+use serde::Serialize;
+use serde::ser::SerializeSeq;
 
 use crate::cli::Failure;
 

@@ -4,8 +4,8 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use serde::Serialize;
 use crate::events::{MessageKind, MessageLine, messages};
+use serde::Serialize;
 
 use crate::cli::Failure;
 

@@ -274,10 +274,7 @@ pub(crate) fn check_topics_in_files(files: &[PathBuf], topics: &[String]) -> Res
         .iter()
         .filter_map(|path| {
             let file = std::io::BufReader::new(std::fs::File::open(path).ok()?);
-            Some((
-                path,
-                crate::StreamReader::read_definitions(file).ok()?,
-            ))
+            Some((path, crate::StreamReader::read_definitions(file).ok()?))
         })
         .collect();
     for topic in topics {

@@ -27,10 +27,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     let report = Report::of_log(&log, &name)
         .map_err(|e| Failure::exit(1, format!("{}: {e}", args.file.display())))?;
     let path = args.output.clone().unwrap_or_else(|| {
-        PathBuf::from(format!(
-            "{}.html",
-            crate::file_names::log_stem(&args.file)
-        ))
+        PathBuf::from(format!("{}.html", crate::file_names::log_stem(&args.file)))
     });
     std::fs::write(&path, report.html())
         .map_err(|e| Failure::exit(1, format!("{}: {e}", path.display())))?;

@@ -392,6 +392,61 @@ impl Columns {
         self.defs().iter().zip(&self.values)
     }
 
+    /// The rows of a time window, as [`Window::admit`] takes them (pyulog's `ulog2csv`
+    /// rule: from the first row at or after the start, to the last before the first row
+    /// at or after the end).
+    pub fn window(self, window: &Window) -> Columns {
+        let Some(t) = self.get("timestamp").and_then(ColumnValues::as_uint64) else {
+            return self;
+        };
+        let mut started = false;
+        let mut keep = Vec::with_capacity(t.len());
+        for &t in t {
+            let k = match window.admit(t, started) {
+                Admit::Skip => false,
+                Admit::Take => {
+                    started = true;
+                    true
+                }
+                Admit::Stop => break,
+            };
+            keep.push(k);
+        }
+        keep.resize(t.len(), false);
+        fn pick<T: Clone>(v: Vec<T>, keep: &[bool]) -> Vec<T> {
+            v.into_iter()
+                .zip(keep)
+                .filter(|(_, k)| **k)
+                .map(|(x, _)| x)
+                .collect()
+        }
+        let rows = keep.iter().filter(|k| **k).count();
+        let values = self
+            .values
+            .into_iter()
+            .map(|v| match v {
+                ColumnValues::Int8(v) => ColumnValues::Int8(pick(v, &keep)),
+                ColumnValues::UInt8(v) => ColumnValues::UInt8(pick(v, &keep)),
+                ColumnValues::Int16(v) => ColumnValues::Int16(pick(v, &keep)),
+                ColumnValues::UInt16(v) => ColumnValues::UInt16(pick(v, &keep)),
+                ColumnValues::Int32(v) => ColumnValues::Int32(pick(v, &keep)),
+                ColumnValues::UInt32(v) => ColumnValues::UInt32(pick(v, &keep)),
+                ColumnValues::Int64(v) => ColumnValues::Int64(pick(v, &keep)),
+                ColumnValues::UInt64(v) => ColumnValues::UInt64(pick(v, &keep)),
+                ColumnValues::Float(v) => ColumnValues::Float(pick(v, &keep)),
+                ColumnValues::Double(v) => ColumnValues::Double(pick(v, &keep)),
+                ColumnValues::Bool(v) => ColumnValues::Bool(pick(v, &keep)),
+                ColumnValues::Char(v) => ColumnValues::Char(pick(v, &keep)),
+                ColumnValues::Text(v) => ColumnValues::Text(pick(v, &keep)),
+            })
+            .collect();
+        Columns {
+            spec: self.spec,
+            values,
+            rows,
+        }
+    }
+
     /// The values, in column order.
     pub fn values(&self) -> &[ColumnValues] {
         &self.values

@@ -75,7 +75,7 @@ impl MappedFile {
     }
 
     /// Drops the pages of `[from, to)` from the process (whole pages only).
-    fn release(&self, from: u64, to: u64) {
+    pub(crate) fn release(&self, from: u64, to: u64) {
         const PAGE: u64 = 4096;
         let from = from.div_ceil(PAGE) * PAGE;
         let to = to / PAGE * PAGE;

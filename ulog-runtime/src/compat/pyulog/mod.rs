@@ -243,9 +243,34 @@ type Step<T> = Result<T, Raise>;
 
 /// Reads `data` as pyulog does.
 pub fn read(data: &[u8], options: &PyulogOptions) -> Result<PyulogFile, PyulogError> {
+    read_releasing(data, options, None)
+}
+
+/// [`read`] of a memory-mapped file, its pages given back to the kernel behind the reading
+/// (so that the process holds the rows, not the file and the rows).
+#[cfg(feature = "mmap")]
+pub fn read_mapped(
+    file: &crate::read::MappedFile,
+    options: &PyulogOptions,
+) -> Result<PyulogFile, PyulogError> {
+    let release = |from: u64, to: u64| file.release(from, to);
+    read_releasing(file, options, Some(&release))
+}
+
+/// Bytes behind the reading that are given back at once, and how far behind it.
+const RELEASE_STEP: usize = 8 << 20;
+const RELEASE_MARGIN: usize = 1 << 20;
+
+fn read_releasing(
+    data: &[u8],
+    options: &PyulogOptions,
+    release: Option<&dyn Fn(u64, u64)>,
+) -> Result<PyulogFile, PyulogError> {
     let mut r = Reader {
         data,
         pos: 0,
+        release,
+        released: 0,
         options,
         f: PyulogFile {
             has_sync: true,
@@ -301,6 +326,9 @@ struct Reader<'a> {
     data: &'a [u8],
     /// The file position, relative to the bytes' start (may be past their end).
     pos: usize,
+    /// Gives back the pages of a range of `data` (a mapped file's), and up to where it has.
+    release: Option<&'a dyn Fn(u64, u64)>,
+    released: usize,
     options: &'a PyulogOptions,
     f: PyulogFile,
     /// `_subscriptions`, in insertion order (a replaced key keeps its place).
@@ -552,6 +580,13 @@ impl<'a> Reader<'a> {
         let mut curr = self.absolute();
         loop {
             let start = self.pos;
+            if let Some(release) = self.release
+                && start >= self.released + RELEASE_STEP + RELEASE_MARGIN
+            {
+                let to = start - RELEASE_MARGIN;
+                release(self.released as u64, to as u64);
+                self.released = to;
+            }
             let head = self.read(3);
             curr += head.len() as u64;
             if head.len() < 3 {
@@ -706,15 +741,7 @@ impl<'a> Reader<'a> {
         let multi_id = data[0];
         let msg_id = u16::from_le_bytes([data[1], data[2]]);
         let name = self.string(&data[3..])?;
-        let mut fields = Vec::new();
-        let mut timestamp_idx = -1;
-        self.flatten("", &name, &mut fields, &mut timestamp_idx, 0)?;
-        while fields
-            .last()
-            .is_some_and(|f: &(String, String)| f.0.starts_with("_padding"))
-        {
-            fields.pop();
-        }
+        let (fields, timestamp_idx) = fields_of(&self.f.formats, &name)?;
         // numpy refuses two fields of one name.
         let mut names = HashSet::with_capacity(fields.len());
         if !fields.iter().all(|f| names.insert(f.0.as_str())) {
@@ -744,61 +771,6 @@ impl<'a> Reader<'a> {
             }
         } else {
             self.filtered.insert(msg_id);
-        }
-        Ok(())
-    }
-
-    fn flatten(
-        &self,
-        prefix: &str,
-        type_name: &str,
-        out: &mut Vec<(String, String)>,
-        timestamp_idx: &mut i64,
-        depth: usize,
-    ) -> Step<()> {
-        if depth > MAX_DEPTH {
-            return Err(Raise::Fatal(PyulogError::Recursion(type_name.to_owned())));
-        }
-        let format = self
-            .f
-            .formats
-            .iter()
-            .find(|f| f.name == type_name)
-            .ok_or(Raise::Corrupt)?;
-        for (ty, n, field) in &format.fields {
-            if out.len() > MAX_FIELDS {
-                return Err(Raise::Corrupt);
-            }
-            if basic_size(ty).is_some() {
-                if *n > 0 {
-                    for i in 0..*n {
-                        out.push((format!("{prefix}{field}[{i}]"), ty.clone()));
-                    }
-                } else {
-                    out.push((format!("{prefix}{field}"), ty.clone()));
-                }
-                if prefix.is_empty() && field == "timestamp" {
-                    *timestamp_idx = out.len() as i64 - 1;
-                }
-            } else if *n > 0 {
-                for i in 0..*n {
-                    self.flatten(
-                        &format!("{prefix}{field}[{i}]."),
-                        ty,
-                        out,
-                        timestamp_idx,
-                        depth + 1,
-                    )?;
-                }
-            } else {
-                self.flatten(
-                    &format!("{prefix}{field}."),
-                    ty,
-                    out,
-                    timestamp_idx,
-                    depth + 1,
-                )?;
-            }
         }
         Ok(())
     }
@@ -836,6 +808,111 @@ impl<'a> Reader<'a> {
         }
         Ok(())
     }
+}
+
+/// The flattened fields of a topic (trailing padding removed) and the index of
+/// `timestamp` (-1 if none), as pyulog's `_MessageAddLogged` makes them.
+fn fields_of(formats: &[Format], name: &str) -> Step<(Vec<(String, String)>, i64)> {
+    let mut fields = Vec::new();
+    let mut timestamp_idx = -1;
+    flatten(formats, "", name, &mut fields, &mut timestamp_idx, 0)?;
+    while fields
+        .last()
+        .is_some_and(|f: &(String, String)| f.0.starts_with("_padding"))
+    {
+        fields.pop();
+    }
+    Ok((fields, timestamp_idx))
+}
+
+fn flatten(
+    formats: &[Format],
+    prefix: &str,
+    type_name: &str,
+    out: &mut Vec<(String, String)>,
+    timestamp_idx: &mut i64,
+    depth: usize,
+) -> Step<()> {
+    if depth > MAX_DEPTH {
+        return Err(Raise::Fatal(PyulogError::Recursion(type_name.to_owned())));
+    }
+    let format = formats
+        .iter()
+        .find(|f| f.name == type_name)
+        .ok_or(Raise::Corrupt)?;
+    for (ty, n, field) in &format.fields {
+        if out.len() > MAX_FIELDS {
+            return Err(Raise::Corrupt);
+        }
+        if basic_size(ty).is_some() {
+            if *n > 0 {
+                for i in 0..*n {
+                    out.push((format!("{prefix}{field}[{i}]"), ty.clone()));
+                }
+            } else {
+                out.push((format!("{prefix}{field}"), ty.clone()));
+            }
+            if prefix.is_empty() && field == "timestamp" {
+                *timestamp_idx = out.len() as i64 - 1;
+            }
+        } else if *n > 0 {
+            for i in 0..*n {
+                let p = format!("{prefix}{field}[{i}].");
+                flatten(formats, &p, ty, out, timestamp_idx, depth + 1)?;
+            }
+        } else {
+            flatten(
+                formats,
+                &format!("{prefix}{field}."),
+                ty,
+                out,
+                timestamp_idx,
+                depth + 1,
+            )?;
+        }
+    }
+    Ok(())
+}
+
+/// The datasets pyulog would make, of every row this reader recovers of `log` (the same
+/// file `file` was read from): one per subscription with rows whose topic `filter` keeps,
+/// in pyulog's fields and order (by name and instance, the last subscribed first), each
+/// row its first bytes as pyulog's fields lay them out (rows too short left out).
+pub fn recovered_datasets(
+    log: &crate::Log<'_>,
+    file: &PyulogFile,
+    filter: &NameFilter,
+) -> Vec<Dataset> {
+    let mut out = Vec::new();
+    for sub in log.subscriptions().iter().rev() {
+        if !filter.keeps(&sub.name) {
+            continue;
+        }
+        let Ok((fields, timestamp_idx)) = fields_of(&file.formats, &sub.name) else {
+            continue;
+        };
+        let row_size: usize = fields.iter().map(|f| basic_size(&f.1).unwrap_or(0)).sum();
+        let mut rows = Vec::new();
+        for row in log.rows(sub) {
+            if let Some(r) = row.data.get(..row_size) {
+                rows.extend_from_slice(r);
+            }
+        }
+        if rows.is_empty() {
+            continue;
+        }
+        out.push(Dataset {
+            name: sub.name.clone(),
+            multi_id: sub.multi_id,
+            msg_id: sub.msg_id,
+            fields,
+            timestamp_idx,
+            rows,
+            row_size,
+        });
+    }
+    out.sort_by(|a, b| (&a.name, a.multi_id).cmp(&(&b.name, b.multi_id)));
+    out
 }
 
 /// `data[a:b]` as Python slices it.

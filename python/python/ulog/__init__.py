@@ -1,0 +1,37 @@
+"""PX4 ULog flight logs on the Rust reader.
+
+- ``ulog.ULog``: pyulog 1.3.0's ``ULog``, the same attributes and answers, many times faster
+  (``from ulog import ULog`` instead of ``from pyulog import ULog``).
+- ``ulog.open(path_or_bytes)``: a ``Log`` with everything the reader recovers, its topics as
+  Arrow tables (``log.table("vehicle_attitude")``) that pyarrow, Polars and DuckDB take
+  without a copy.
+- ``ulog.to_parquet(paths, out_dir)``: per-topic Parquet files and a ``metadata.json`` per
+  log, as ``ulog parquet`` writes them.
+- ``ulog.spark``: the same on Apache Spark (needs pyspark).
+- The ``ulog`` command-line tool (``python -m ulog``).
+"""
+
+from __future__ import annotations
+
+from ._native import Log, Table, open, to_parquet
+from ._pyulog import ULog
+from ._ulog import NotAULogError, ULogError, ULogIOError, UnsupportedFlagError, __version__
+
+# pyulog's names for its exceptions, so that `except ULogException` keeps working.
+ULogException = ULogError
+ULogIncompatibleFlagException = UnsupportedFlagError
+
+__all__ = [
+    "Log",
+    "NotAULogError",
+    "Table",
+    "ULog",
+    "ULogError",
+    "ULogException",
+    "ULogIOError",
+    "ULogIncompatibleFlagException",
+    "UnsupportedFlagError",
+    "__version__",
+    "open",
+    "to_parquet",
+]

@@ -1,0 +1,198 @@
+"""The native API: a ``Log`` over the Rust reader and its topics as Arrow tables."""
+
+from __future__ import annotations
+
+import json
+import os
+from typing import Any, Dict, List, Optional, Sequence, Union
+
+from . import _ulog
+
+__all__ = ["Log", "Table", "open", "to_parquet"]
+
+
+class Table:
+    """One topic instance's columns, as the ``arrow`` feature types them, handed over
+    through the Arrow PyCapsule interface: ``pyarrow.table(t)``, ``polars.DataFrame(t)`` and
+    DuckDB (``duckdb.sql("select * from t")``) take them without a copy."""
+
+    def __init__(self, native: "_ulog.Table"):
+        self._native = native
+
+    def __arrow_c_stream__(self, requested_schema: Any = None) -> Any:
+        return self._native.__arrow_c_stream__(requested_schema)
+
+    def __arrow_c_schema__(self) -> Any:
+        return self._native.__arrow_c_schema__()
+
+    @property
+    def num_rows(self) -> int:
+        """Rows."""
+        return self._native.num_rows
+
+    @property
+    def column_names(self) -> List[str]:
+        """Column names, in order (pyulog's: ``timestamp``, ``q[0]``, ``esc[3].esc_rpm``)."""
+        return self._native.column_names
+
+    @property
+    def topic(self) -> str:
+        """The topic."""
+        return self._native.topic
+
+    @property
+    def multi_id(self) -> int:
+        """The instance."""
+        return self._native.multi_id
+
+    def __len__(self) -> int:
+        return self._native.num_rows
+
+    def __repr__(self) -> str:
+        return repr(self._native)
+
+    def numpy(self) -> Dict[str, Any]:
+        """The columns as numpy arrays (text columns as lists of str)."""
+        return self._native.numpy()
+
+    def to_arrow(self) -> Any:
+        """A ``pyarrow.Table`` (needs pyarrow)."""
+        import pyarrow
+
+        return pyarrow.table(self)
+
+    def to_pandas(self) -> Any:
+        """A ``pandas.DataFrame`` (needs pandas and pyarrow)."""
+        return self.to_arrow().to_pandas()
+
+    def to_polars(self) -> Any:
+        """A ``polars.DataFrame`` (needs polars)."""
+        import polars
+
+        return polars.DataFrame(self)
+
+
+class Log:
+    """A log read by the Rust reader: every intact message of a damaged file, with what
+    recovery skipped in ``diagnostics``. Open one with ``ulog.open``."""
+
+    def __init__(self, native: "_ulog.Log"):
+        self._native = native
+
+    @property
+    def name(self) -> str:
+        """The file's name (empty for bytes)."""
+        return self._native.name
+
+    @property
+    def header(self) -> Dict[str, Any]:
+        """``version``, ``start_timestamp`` (µs), ``start_utc`` (text, or None)."""
+        return self._native.header
+
+    @property
+    def info(self) -> Dict[str, Any]:
+        """Info values by key (whole keys, spaces included)."""
+        return self._native.info
+
+    @property
+    def multi_info(self) -> Dict[str, List[List[Any]]]:
+        """Multi info values by key: a list of values, each the list of its parts."""
+        return self._native.multi_info
+
+    @property
+    def parameters(self) -> Dict[str, Union[int, float]]:
+        """Parameters as logging started."""
+        return self._native.parameters
+
+    @property
+    def parameter_changes(self) -> List[tuple]:
+        """Parameter changes: ``(timestamp µs, name, value)``."""
+        return self._native.parameter_changes
+
+    @property
+    def default_parameters(self) -> List[tuple]:
+        """Default parameters: ``(default_types bits, name, value)``."""
+        return self._native.default_parameters
+
+    @property
+    def logged_messages(self) -> List[tuple]:
+        """Logged strings: ``(timestamp µs, level byte, tag or None, text)``."""
+        return self._native.logged_messages
+
+    @property
+    def dropouts(self) -> List[tuple]:
+        """Dropouts: ``(timestamp µs, duration ms)``."""
+        return self._native.dropouts
+
+    @property
+    def diagnostics(self) -> List[tuple]:
+        """What recovery skipped or found odd: ``(byte offset, what)``."""
+        return self._native.diagnostics
+
+    def messages(self) -> List[tuple]:
+        """Logged strings and PX4 events as ``ulog messages`` lists them:
+        ``(timestamp µs, level, text)``."""
+        return self._native.messages()
+
+    def events(self) -> List[Dict[str, Any]]:
+        """PX4 events decoded with the metadata the log embeds."""
+        return self._native.events()
+
+    def topics(self) -> List[Dict[str, Any]]:
+        """Topic instances with rows: ``name``, ``multi_id``, ``rows``, ``first_timestamp``,
+        ``last_timestamp``."""
+        return self._native.topics()
+
+    def table(
+        self,
+        topic: str,
+        multi_id: int = 0,
+        columns: Optional[Sequence[str]] = None,
+        start: Optional[float] = None,
+        end: Optional[float] = None,
+    ) -> Table:
+        """A topic instance's columns (only ``columns`` if given), the rows from ``start``
+        to ``end`` seconds as ``ulog csv --start --end`` takes them. KeyError (naming the
+        closest) for a topic or column the log lacks."""
+        return Table(
+            self._native.table(topic, multi_id, list(columns) if columns is not None else None, start, end)
+        )
+
+    def analysis(self) -> Dict[str, Any]:
+        """The flight analysis (what ``ulog analyze --json`` prints)."""
+        return json.loads(self._native.analysis_json())
+
+    def __repr__(self) -> str:
+        return repr(self._native)
+
+
+def open(source: Union[str, "os.PathLike[str]", bytes, bytearray, memoryview]) -> Log:  # noqa: A001
+    """Opens a log: a path (memory-mapped, not read into memory) or the file's bytes."""
+    if isinstance(source, (bytearray, memoryview)):
+        source = bytes(source)
+    return Log(_ulog.Log.open(source))
+
+
+def to_parquet(
+    paths: Union[str, "os.PathLike[str]", Sequence[Union[str, "os.PathLike[str]"]]],
+    out_dir: Union[str, "os.PathLike[str]"],
+    layout: str = "per-log",
+    topics: Optional[Sequence[str]] = None,
+    threads: Optional[int] = None,
+    analysis: bool = True,
+) -> List[Dict[str, Any]]:
+    """Converts logs to Parquet as ``ulog parquet`` does (``layout`` ``"per-log"`` or
+    ``"hive"``, only ``topics`` if given, ``threads`` logs at once, the flight analysis in
+    each ``metadata.json`` unless ``analysis=False``). One dict per log, in order: ``ok``
+    and what it wrote (``files``, ``metadata``, ``log_dir``, ``notes``), or ``error``; a
+    log that fails does not stop the others."""
+    if isinstance(paths, (str, os.PathLike)):
+        paths = [paths]
+    return _ulog.to_parquet(
+        [os.fspath(p) for p in paths],
+        os.fspath(out_dir),
+        layout,
+        list(topics) if topics is not None else None,
+        threads,
+        analysis,
+    )

@@ -1,0 +1,32 @@
+//! The native part of the Python package `ulog` (`ulog._ulog`): pyulog's data model read by
+//! `ulog_runtime::compat::pyulog` ([`compat`]), logs over the Rust reader with their topics
+//! as Arrow streams ([`log`]), the Parquet converter and the command-line tool ([`tools`]).
+//! The Python modules in `python/ulog/` build the public API on these.
+
+use pyo3::prelude::*;
+
+mod compat;
+mod errors;
+mod log;
+mod tools;
+mod values;
+
+/// The extension module.
+#[pymodule]
+fn _ulog(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add("ULogError", py.get_type::<errors::ULogError>())?;
+    m.add("NotAULogError", py.get_type::<errors::NotAULogError>())?;
+    m.add(
+        "UnsupportedFlagError",
+        py.get_type::<errors::UnsupportedFlagError>(),
+    )?;
+    m.add("ULogIOError", py.get_type::<errors::ULogIOError>())?;
+    m.add_function(wrap_pyfunction!(compat::read_pyulog, m)?)?;
+    m.add_class::<log::Log>()?;
+    m.add_class::<log::Table>()?;
+    m.add_function(wrap_pyfunction!(tools::to_parquet, m)?)?;
+    m.add_function(wrap_pyfunction!(tools::cli_main, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

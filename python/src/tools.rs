@@ -1,0 +1,79 @@
+//! The Parquet converter (`to_parquet`) and the `ulog` command-line tool (`cli_main`).
+
+use std::path::PathBuf;
+
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use ulog_runtime::columns::parquet::{Converter, Layout, ParquetOptions};
+
+/// Converts logs to Parquet with the Rust `Converter` (what `ulog parquet` does); one dict
+/// per log, in order: `log`, `ok`, and either `files` (dicts of `path`, `topic`,
+/// `multi_id`, `rows`), `metadata`, `log_dir`, `notes`, or `error`. A log that fails does
+/// not stop the others. The GIL is released while converting.
+#[pyfunction]
+#[pyo3(signature = (paths, out_dir, layout="per-log", topics=None, threads=None, analysis=true))]
+pub(crate) fn to_parquet<'py>(
+    py: Python<'py>,
+    paths: Vec<PathBuf>,
+    out_dir: PathBuf,
+    layout: &str,
+    topics: Option<Vec<String>>,
+    threads: Option<usize>,
+    analysis: bool,
+) -> PyResult<Bound<'py, PyList>> {
+    let layout = match layout {
+        "per-log" => Layout::PerLog,
+        "hive" => Layout::Hive,
+        other => {
+            return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                "layout `{other}`: `per-log` or `hive`"
+            )));
+        }
+    };
+    let options = ParquetOptions {
+        layout,
+        topics: topics.unwrap_or_default(),
+        analysis,
+        ..ParquetOptions::default()
+    };
+    let threads = threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, std::num::NonZero::get));
+    let converter = Converter::new(out_dir, options);
+    let results = py.detach(|| converter.convert_files(&paths, threads));
+    let out = PyList::empty(py);
+    for (path, result) in paths.iter().zip(results) {
+        let d = PyDict::new(py);
+        d.set_item("log", path.display().to_string())?;
+        match result {
+            Ok(c) => {
+                d.set_item("ok", true)?;
+                let files = PyList::empty(py);
+                for f in &c.files {
+                    let fd = PyDict::new(py);
+                    fd.set_item("path", f.path.display().to_string())?;
+                    fd.set_item("topic", &f.topic)?;
+                    fd.set_item("multi_id", f.multi_id)?;
+                    fd.set_item("rows", f.rows)?;
+                    files.append(fd)?;
+                }
+                d.set_item("files", files)?;
+                d.set_item("metadata", c.metadata.display().to_string())?;
+                d.set_item("log_dir", &c.log_dir)?;
+                d.set_item("notes", &c.notes)?;
+            }
+            Err(e) => {
+                d.set_item("ok", false)?;
+                d.set_item("error", e.to_string())?;
+            }
+        }
+        out.append(d)?;
+    }
+    Ok(out)
+}
+
+/// Runs the `ulog` tool with `argv` (the program name first); its exit code. The GIL is
+/// released while it runs.
+#[pyfunction]
+pub(crate) fn cli_main(py: Python<'_>, argv: Vec<std::ffi::OsString>) -> u8 {
+    py.detach(|| ulog_runtime::cli::main(argv))
+}
