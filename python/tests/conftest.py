@@ -37,4 +37,4 @@ def pytest_generate_tests(metafunc):
 
 @pytest.fixture
 def fuzz_regressions() -> Path:
-    return ROOT / "fuzz" / "regressions"
+    return ROOT / "tests" / "fuzz_regressions"

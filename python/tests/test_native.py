@@ -1,0 +1,159 @@
+"""The native API: topics as Arrow tables (read by pyarrow, Polars and DuckDB without a
+copy) equal to pyulog's columns, the log's metadata, Parquet, the command-line tool, and
+threads reading at once."""
+
+import json
+import subprocess
+import sys
+import threading
+
+import numpy as np
+import pytest
+import pyulog
+
+import ulog
+
+
+def pyulog_instances(u):
+    """pyulog's datasets of each instance with one subscription (resubscribed ones are
+    one table in the native API)."""
+    seen = {}
+    for d in u.data_list:
+        seen.setdefault((d.name, d.multi_id), []).append(d)
+    return {k: v[0] for k, v in seen.items() if len(v) == 1}
+
+
+def test_tables_hold_pyulogs_values(corpus_log, capsys):
+    import pyarrow as pa
+
+    u = pyulog.ULog(str(corpus_log))
+    capsys.readouterr()
+    log = ulog.open(str(corpus_log))
+    topics = {(t["name"], t["multi_id"]): t for t in log.topics()}
+    for (name, multi_id), d in pyulog_instances(u).items():
+        t = log.table(name, multi_id)
+        assert topics[(name, multi_id)]["rows"] == t.num_rows
+        if u.file_corruption:
+            # A damaged log: the native reader keeps intact rows pyulog's recovery cannot
+            # see; every row pyulog has is among them, in order.
+            ours = iter(t.numpy()["timestamp"].tolist())
+            assert all(any(x == y for y in ours) for x in d.data["timestamp"].tolist()), name
+            continue
+        assert t.num_rows == len(d.data["timestamp"])
+        arrow = pa.table(t)
+        assert arrow.num_rows == t.num_rows
+        for field in d.field_data:
+            col = field.field_name
+            if col not in arrow.column_names:
+                # pyulog shows char arrays byte by byte (and nested padding); the table has
+                # the text or leaves padding out.
+                continue
+            ours = arrow.column(col).to_numpy()
+            theirs = d.data[col]
+            if field.type_str == "bool":
+                assert np.array_equal(ours, theirs != 0), (name, col)
+            else:
+                assert np.array_equal(ours.astype(theirs.dtype), theirs, equal_nan=True), (name, col)
+        # numpy() gives the same values.
+        arrays = t.numpy()
+        assert list(arrays) == t.column_names
+        assert np.array_equal(arrays["timestamp"], d.data["timestamp"])
+
+
+def test_polars_duckdb_and_pandas_take_a_table():
+    import duckdb
+    import pandas as pd
+    import polars as pl
+
+    path = str(pytest.importorskip("conftest").corpus_dir() / "pyulog" / "sample_log_small.ulg")
+    log = ulog.open(path)
+    t = log.table("vehicle_attitude", columns=["timestamp", "q[0]"])
+    assert t.column_names == ["timestamp", "q[0]"]
+    df = pl.DataFrame(t)
+    assert df.shape == (t.num_rows, 2) and df.schema["q[0]"] == pl.Float32
+    mean = duckdb.sql('select avg("q[0]") as m from t').fetchall()[0][0]
+    assert abs(mean - float(df["q[0]"].mean())) < 1e-6
+    pdf = t.to_pandas()
+    assert isinstance(pdf, pd.DataFrame) and len(pdf) == t.num_rows
+    assert t.to_polars().equals(df)
+    # A window in seconds, as `ulog csv --start --end` takes it.
+    ts = df["timestamp"].to_numpy()
+    start, end = ts[10] / 1e6, ts[20] / 1e6
+    w = log.table("vehicle_attitude", start=start, end=end)
+    assert np.array_equal(pl.DataFrame(w)["timestamp"].to_numpy(), ts[10:20])
+    with pytest.raises(KeyError, match="did you mean `vehicle_attitude`"):
+        log.table("vehicle_atitude")
+    with pytest.raises(KeyError, match="no column `q\\[9\\]`"):
+        log.table("vehicle_attitude", columns=["q[9]"])
+
+
+def test_the_log_says_what_the_reader_read():
+    from conftest import corpus_dir
+
+    path = corpus_dir() / "pyulog" / "sample_px4_events.ulg"
+    u = pyulog.ULog(str(path))
+    log = ulog.open(path)
+    assert log.header["start_timestamp"] == u.start_timestamp
+    assert log.parameters == u.initial_parameters
+    assert [(t, n, v) for t, n, v in log.parameter_changes] == u.changed_parameters
+    assert log.info["sys_name"] == u.msg_info_dict["sys_name"]
+    assert [m[3] for m in log.logged_messages] == [m.message for m in u.logged_messages]
+    assert [(t, d) for t, d in log.dropouts] == [(d.timestamp, d.duration) for d in u.dropouts]
+    events = log.events()
+    assert events and all(e["name"] for e in events), "decoded with the embedded metadata"
+    lines = log.messages()
+    assert any("Takeoff detected" in text for _, _, text in lines)
+    a = log.analysis()
+    assert a["flight_modes"] and "field_stats" in a
+    # Bytes work as a path does.
+    assert ulog.open(path.read_bytes()).topics() == log.topics()
+
+
+def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
+    import pyarrow.parquet as pq
+    from conftest import corpus_dir
+
+    good = corpus_dir() / "pyulog" / "sample_log_small.ulg"
+    bad = tmp_path / "not_a_log.ulg"
+    bad.write_bytes(b"not a log at all")
+    results = ulog.to_parquet([good, bad], tmp_path / "out")
+    assert [r["ok"] for r in results] == [True, False]
+    assert "not a ULog file" in results[1]["error"]
+    files = results[0]["files"]
+    battery = next(f for f in files if f["topic"] == "battery_status")
+    table = pq.read_table(battery["path"])
+    assert table.num_rows == battery["rows"]
+    meta = json.loads(open(results[0]["metadata"]).read())
+    assert meta["analysis"]["battery"]["instances"]
+    hive = ulog.to_parquet(str(good), tmp_path / "hive", layout="hive", topics=["battery_status"])
+    assert all(f["topic"] == "battery_status" for f in hive[0]["files"])
+    with pytest.raises(ValueError, match="layout"):
+        ulog.to_parquet(str(good), tmp_path / "x", layout="flat")
+
+
+def test_the_command_line_tool_ships_with_the_package():
+    from conftest import corpus_dir
+
+    path = str(corpus_dir() / "pyulog" / "sample.ulg")
+    run = subprocess.run([sys.executable, "-m", "ulog", "info", path], capture_output=True, text=True)
+    assert run.returncode == 0 and "sys_name" in run.stdout, run.stderr
+    run = subprocess.run([sys.executable, "-m", "ulog", "info", "/no/such.ulg"], capture_output=True, text=True)
+    assert run.returncode == 1 and "no such file" in run.stderr
+    run = subprocess.run([sys.executable, "-m", "ulog", "--bogus"], capture_output=True, text=True)
+    assert run.returncode == 2
+
+
+def test_threads_read_logs_at_once(corpus_log):
+    # The GIL is released while reading: threads finish, with the same answers.
+    results = [None] * 4
+
+    def read(i):
+        u = ulog.ULog(str(corpus_log))
+        results[i] = [(d.name, d.multi_id, len(d.data["timestamp"])) for d in u.data_list]
+
+    threads = [threading.Thread(target=read, args=(i,)) for i in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=120)
+    assert all(r == results[0] for r in results)
