@@ -77,3 +77,20 @@ pub(crate) fn to_parquet<'py>(
 pub(crate) fn cli_main(py: Python<'_>, argv: Vec<std::ffi::OsString>) -> u8 {
     py.detach(|| ulog_runtime::cli::main(argv))
 }
+
+/// The names `ulog parquet --layout hive` gives the logs of `paths` converted together, in
+/// order: each one's stem, made safe for a folder, `~2`, `~3`... after the first of a stem
+/// (without regard to case).
+#[pyfunction]
+pub(crate) fn log_names(paths: Vec<PathBuf>) -> Vec<String> {
+    let mut seen: std::collections::HashMap<String, u32> = std::collections::HashMap::new();
+    paths
+        .iter()
+        .map(|p| {
+            let stem = ulog_runtime::file_names::log_stem(p);
+            let n = seen.entry(stem.to_lowercase()).or_insert(0);
+            *n += 1;
+            ulog_runtime::file_names::numbered("", &stem, "", *n)
+        })
+        .collect()
+}

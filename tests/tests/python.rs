@@ -51,7 +51,14 @@ fn python(target: &Path) -> Result<PathBuf, String> {
         ));
     }
     let pip = Command::new(&python)
-        .args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "-r"])
+        .args([
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "--disable-pip-version-check",
+            "-r",
+        ])
         .arg(&requirements)
         .output()
         .map_err(|e| e.to_string())?;
