@@ -1,6 +1,6 @@
 //! The native part of the Python package `ulog` (`ulog._ulog`): pyulog's data model read by
-//! `ulog_runtime::compat::pyulog` ([`compat`]), logs over the Rust reader with their topics
-//! as Arrow streams ([`log`]), the Parquet converter and the command-line tool ([`tools`]).
+//! `ulog_runtime::compat::pyulog` (module `compat`), logs over the Rust reader with their topics
+//! as Arrow streams (module `log`), the Parquet converter and the command-line tool (module `tools`).
 //! The Python modules in `python/ulog/` build the public API on these.
 
 use pyo3::prelude::*;

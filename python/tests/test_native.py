@@ -58,6 +58,16 @@ def test_tables_hold_pyulogs_values(corpus_log, capsys):
         arrays = t.numpy()
         assert list(arrays) == t.column_names
         assert np.array_equal(arrays["timestamp"], d.data["timestamp"])
+    # tables(): every instance at once, each equal to its table().
+    every = log.tables()
+    assert sorted(every) == sorted(topics)
+    for (name, multi_id), t in every.items():
+        a, b = pa.table(t), pa.table(log.table(name, multi_id))
+        assert a.schema == b.schema and a.num_rows == b.num_rows, (name, multi_id)
+        for col in a.column_names:
+            x, y = a.column(col).to_numpy(), b.column(col).to_numpy()
+            nan = x.dtype.kind == "f"
+            assert np.array_equal(x, y, equal_nan=nan), (name, multi_id, col)
 
 
 def test_polars_duckdb_and_pandas_take_a_table():

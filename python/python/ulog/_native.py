@@ -158,6 +158,11 @@ class Log:
             self._native.table(topic, multi_id, list(columns) if columns is not None else None, start, end)
         )
 
+    def tables(self) -> Dict[tuple, Table]:
+        """Every topic instance's table, by ``(topic, multi_id)``, made in one pass over the
+        file on every core: for all of a log's topics, faster than ``table()`` for each."""
+        return {(t.topic, t.multi_id): Table(t) for t in self._native.tables()}
+
     def analysis(self) -> Dict[str, Any]:
         """The flight analysis (what ``ulog analyze --json`` prints)."""
         return json.loads(self._native.analysis_json())

@@ -208,3 +208,73 @@ fn a_log_gives_the_columns_of_an_instance_with_unwrapped_timestamps() {
         "the log has no topic `tt`; did you mean `t`?"
     );
 }
+
+#[test]
+fn all_columns_in_one_pass_equal_each_instances_columns() {
+    // Two topics, two instances of one, a resubscription, a wrapping version-0 timestamp and
+    // more rows than the pass has threads: each instance's columns as `columns` gives them.
+    let mut f = FileHeader {
+        version: 0,
+        start_timestamp: 0,
+    }
+    .to_bytes()
+    .to_vec();
+    Message::Format(b"t:uint16_t timestamp;float x;")
+        .encode(&mut f)
+        .unwrap();
+    Message::Format(b"u:uint16_t timestamp;int8_t k;char[3] s;")
+        .encode(&mut f)
+        .unwrap();
+    for (multi_id, msg_id, name) in [(0, 0, &b"t"[..]), (1, 1, b"t"), (0, 2, b"u")] {
+        Message::Subscribe {
+            multi_id,
+            msg_id,
+            name,
+        }
+        .encode(&mut f)
+        .unwrap();
+    }
+    let mut ts = 0u16;
+    for i in 0..1_000u32 {
+        ts = ts.wrapping_add(997);
+        let msg_id = match i % 3 {
+            1 if i > 500 => 3,
+            k => k as u16,
+        };
+        let mut data = ts.to_le_bytes().to_vec();
+        if msg_id == 2 {
+            data.push(i as u8);
+            data.extend_from_slice(b"ab\0");
+        } else {
+            data.extend_from_slice(&(i as f32).to_le_bytes());
+        }
+        Message::Data {
+            msg_id,
+            data: &data,
+        }
+        .encode(&mut f)
+        .unwrap();
+        if i == 500 {
+            // Instance 1 of `t` resubscribed under a new id.
+            Message::Subscribe {
+                multi_id: 1,
+                msg_id: 3,
+                name: b"t",
+            }
+            .encode(&mut f)
+            .unwrap();
+        }
+    }
+    let log = Log::from_vec(f).unwrap();
+    let all = log.all_columns();
+    let names: Vec<(&str, u8)> = all.iter().map(|(t, m, _)| (t.as_str(), *m)).collect();
+    assert_eq!(names, [("t", 0), ("t", 1), ("u", 0)]);
+    for (topic, multi_id, cols) in &all {
+        assert_eq!(
+            cols,
+            &log.columns(topic, *multi_id).unwrap(),
+            "{topic} {multi_id}"
+        );
+        assert!(cols.rows() > 300, "{topic} {multi_id}: {}", cols.rows());
+    }
+}

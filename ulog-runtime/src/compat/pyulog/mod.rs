@@ -258,8 +258,8 @@ pub fn read_mapped(
 }
 
 /// Bytes behind the reading that are given back at once, and how far behind it.
-const RELEASE_STEP: usize = 8 << 20;
-const RELEASE_MARGIN: usize = 1 << 20;
+const RELEASE_STEP: usize = 2 << 20;
+const RELEASE_MARGIN: usize = 256 << 10;
 
 fn read_releasing(
     data: &[u8],
@@ -277,6 +277,7 @@ fn read_releasing(
             ..PyulogFile::default()
         },
         subscriptions: Vec::new(),
+        by_msg_id: vec![0; 1 << 16],
         filtered: HashSet::new(),
         missing: HashSet::new(),
     };
@@ -333,6 +334,8 @@ struct Reader<'a> {
     f: PyulogFile,
     /// `_subscriptions`, in insertion order (a replaced key keeps its place).
     subscriptions: Vec<Sub>,
+    /// Per msg_id: its index in `subscriptions` + 1, or 0.
+    by_msg_id: Vec<u32>,
     filtered: HashSet<u16>,
     missing: HashSet<u16>,
 }
@@ -616,6 +619,7 @@ impl<'a> Reader<'a> {
         }
         // Each subscription with rows is a dataset, the last subscribed first; then all
         // datasets by name and instance (a stable sort).
+        self.by_msg_id.iter_mut().for_each(|i| *i = 0);
         while let Some(s) = self.subscriptions.pop() {
             if !s.rows.is_empty() {
                 self.f.data.push(Dataset {
@@ -765,9 +769,12 @@ impl<'a> Reader<'a> {
                 timestamp_offset,
                 rows: Vec::new(),
             };
-            match self.subscriptions.iter_mut().find(|s| s.msg_id == msg_id) {
-                Some(s) => *s = sub,
-                None => self.subscriptions.push(sub),
+            match self.by_msg_id[usize::from(msg_id)] {
+                0 => {
+                    self.subscriptions.push(sub);
+                    self.by_msg_id[usize::from(msg_id)] = self.subscriptions.len() as u32;
+                }
+                i => self.subscriptions[i as usize - 1] = sub,
             }
         } else {
             self.filtered.insert(msg_id);
@@ -781,7 +788,11 @@ impl<'a> Reader<'a> {
             return Err(Raise::Struct);
         }
         let msg_id = u16::from_le_bytes([body[0], body[1]]);
-        let Some(sub) = self.subscriptions.iter_mut().find(|s| s.msg_id == msg_id) else {
+        let i = self.by_msg_id[usize::from(msg_id)];
+        let Some(sub) = i
+            .checked_sub(1)
+            .map(|i| &mut self.subscriptions[i as usize])
+        else {
             if !self.filtered.contains(&msg_id) {
                 if self.missing.insert(msg_id) {
                     self.f.printed.push(format!(

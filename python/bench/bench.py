@@ -1,0 +1,79 @@
+#!/usr/bin/env python3
+"""Python readers side by side on one log, in one run, interleaved, each in a fresh
+process (its peak resident memory its own): pyulog 1.3.0's ``ULog(path)``, ``ulog.ULog(path)``
+(the same objects on the Rust reader), and ``ulog.open(path)`` with ``table()`` of every
+topic instance. Prints the medians of wall time and peak RSS, and the ratios.
+
+    python bench.py LOG [--runs N]
+
+Build the package in release mode first (``maturin develop --release`` in ``python/``, or
+``pip install ./python``): a debug build measures nothing.
+"""
+
+import json
+import platform
+import statistics
+import subprocess
+import sys
+
+# What is timed (after the imports, which every run pays alike).
+WORK = {
+    "pyulog.ULog": "u = pyulog.ULog(PATH); n = sum(len(d.data['timestamp']) for d in u.data_list)",
+    "ulog.ULog": "u = ulog.ULog(PATH); n = sum(len(d.data['timestamp']) for d in u.data_list)",
+    "ulog.open + table()": (
+        "log = ulog.open(PATH); "
+        "n = sum(log.table(t['name'], t['multi_id']).num_rows for t in log.topics())"
+    ),
+    "ulog.open + tables()": "log = ulog.open(PATH); n = sum(t.num_rows for t in log.tables().values())",
+}
+
+CHILD = """
+import json, resource, sys, time
+import numpy, pyulog, ulog
+PATH = sys.argv[1]
+t = time.perf_counter()
+{work}
+wall = time.perf_counter() - t
+print(json.dumps({{"wall": wall, "rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "rows": n}}))
+"""
+
+
+def cpu_model() -> str:
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def main():
+    args = sys.argv[1:]
+    runs = 3
+    if "--runs" in args:
+        i = args.index("--runs")
+        runs = int(args[i + 1])
+        del args[i:i + 2]
+    path = args[0]
+    results = {name: [] for name in WORK}
+    names = list(WORK)
+    for r in range(runs):
+        order = names if r % 2 == 0 else names[::-1]
+        for name in order:
+            out = subprocess.run(
+                [sys.executable, "-c", CHILD.format(work=WORK[name]), path],
+                capture_output=True, text=True, check=True)
+            results[name].append(json.loads(out.stdout.strip().splitlines()[-1]))
+    print(f"CPU: {cpu_model()}; {runs} runs each, interleaved; log {path}")
+    med = {n: (statistics.median(x["wall"] for x in v), statistics.median(x["rss_mib"] for x in v))
+           for n, v in results.items()}
+    rows = {n: v[0]["rows"] for n, v in results.items()}
+    base = med["pyulog.ULog"]
+    for n, (wall, rss) in med.items():
+        print(f"  {n:<22} wall {wall:8.3f} s   peak RSS {rss:8.1f} MiB   rows {rows[n]:>10}"
+              f"   pyulog/this: wall {base[0] / wall:6.1f}x, RSS {rss / base[1]:5.2f} of pyulog's")
+
+
+if __name__ == "__main__":
+    main()
