@@ -245,18 +245,24 @@ impl Log {
     }
 
     /// Every topic instance's columns as [`Table`]s, made in one pass over the file on
-    /// every core (faster than a `table()` call per instance).
+    /// every core (faster than a `table()` call per instance); a table's record batches are
+    /// the parts the cores made.
     fn tables(&self, py: Python<'_>) -> PyResult<Vec<Table>> {
         let log = self.log.clone();
         let made = py.detach(move || {
-            log.all_columns()
+            log.all_column_parts()
                 .into_iter()
-                .map(|(topic, multi_id, cols)| {
-                    let schema = ulog_runtime::columns::arrow::schema(cols.spec(), &topic);
-                    let rows = cols.rows();
-                    ulog_runtime::columns::arrow::record_batch(&schema, cols).map(|batch| Table {
-                        schema: batch.schema(),
-                        batches: vec![batch],
+                .map(|(topic, multi_id, parts)| {
+                    // Each part a record batch: the table's chunks, not copied together.
+                    let schema = ulog_runtime::columns::arrow::schema(parts[0].spec(), &topic);
+                    let rows = parts.iter().map(|p| p.rows()).sum();
+                    let batches = parts
+                        .into_iter()
+                        .map(|p| ulog_runtime::columns::arrow::record_batch(&schema, p))
+                        .collect::<Result<Vec<_>, _>>()?;
+                    Ok::<_, arrow_schema::ArrowError>(Table {
+                        schema: batches[0].schema(),
+                        batches,
                         rows,
                         topic,
                         multi_id,

@@ -62,7 +62,7 @@ def test_the_corpus_on_spark_equals_pyulog_and_ulog_parquet(spark, tmp_path, cap
     # A file that is no log at all: a metadata row with its error, not a failed job.
     (inputs / "broken.ulg").write_bytes(b"this is not a ULog file")
     out = tmp_path / "spark"
-    written = ulog.spark.convert(spark, str(inputs / "*.ulg"), str(out), TOPICS)
+    written = ulog.spark.convert(spark, str(inputs / "*.ulg"), str(out), topics=TOPICS)
     assert set(written) <= set(TOPICS) and written
 
     # The metadata table: one row per log, the unreadable ones with their error.

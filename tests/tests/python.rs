@@ -92,6 +92,10 @@ fn package(target: &Path, profile_dir: &Path) -> Result<PathBuf, String> {
     let sources = root().join("python/python/ulog");
     for entry in std::fs::read_dir(&sources).map_err(|e| e.to_string())? {
         let entry = entry.map_err(|e| e.to_string())?;
+        // Files only (a `__pycache__` of an import from the sources is no part of it).
+        if !entry.file_type().map_err(|e| e.to_string())?.is_file() {
+            continue;
+        }
         std::fs::copy(entry.path(), pkg.join(entry.file_name())).map_err(|e| e.to_string())?;
     }
     std::fs::copy(&lib, pkg.join("_ulog.abi3.so")).map_err(|e| e.to_string())?;

@@ -110,6 +110,10 @@ def topics(spark, files, names: Optional[Sequence[str]] = None):
     return out
 
 
+# `convert` takes a parameter named `topics`.
+_topic_frames = topics
+
+
 def _topic_rows(topic: str, schema: pa.Schema, logs: Dict[str, str]):
     def rows(batches: Iterator[pa.RecordBatch]) -> Iterator[pa.RecordBatch]:
         for batch in batches:
@@ -196,13 +200,13 @@ def metadata(spark, files):
     return files.select("path", "content").mapInArrow(per_log, _to_spark_schema(_METADATA))
 
 
-def convert(spark, input_glob: str, output_path: str, topics_only: Optional[Sequence[str]] = None) -> Dict[str, int]:
+def convert(spark, input_glob: str, output_path: str, topics: Optional[Sequence[str]] = None) -> Dict[str, int]:
     """Converts the logs of ``input_glob`` to the hive layout at ``output_path``:
-    ``topic=<t>/log=<l>/multi_id=<m>/`` per topic, and the metadata table at
-    ``output_path/metadata``. Returns the rows written per topic."""
+    ``topic=<t>/log=<l>/multi_id=<m>/`` per topic (only ``topics`` if given), and the
+    metadata table at ``output_path/metadata``. Returns the rows written per topic."""
     files = spark.read.format("binaryFile").load(input_glob)
     written = {}
-    for topic, df in topics(spark, files, topics_only).items():
+    for topic, df in _topic_frames(spark, files, topics).items():
         df.write.mode("overwrite").partitionBy("log", "multi_id").parquet(
             f"{output_path.rstrip('/')}/topic={topic}"
         )

@@ -5,7 +5,10 @@ use std::fmt;
 use super::{Analysis, Motion};
 
 fn opt(v: Option<f64>, unit: &str) -> String {
-    v.map_or_else(|| "-".to_owned(), |v| format!("{v:.2} {unit}"))
+    v.map_or_else(
+        || "-".to_owned(),
+        |v| format!("{v:.2} {unit}").trim_end().to_owned(),
+    )
 }
 
 fn secs(us: u64) -> f64 {

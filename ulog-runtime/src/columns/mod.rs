@@ -920,6 +920,21 @@ impl Log<'_> {
     /// rows are scattered through the file. Instances in the order of
     /// [`Log::instances`].
     pub fn all_columns(&self) -> Vec<(String, u8, Columns)> {
+        self.all_column_parts()
+            .into_iter()
+            .map(|(topic, multi_id, parts)| {
+                let mut parts = parts.into_iter();
+                let mut joined = parts.next().expect("an instance has a part");
+                parts.for_each(|p| joined.append(p));
+                (topic, multi_id, joined)
+            })
+            .collect()
+    }
+
+    /// [`Log::all_columns`] without joining: each instance's columns in parts (one per core
+    /// that met its rows), which in order are its columns. For consumers that take chunks
+    /// (an Arrow table of several record batches), this saves copying the parts together.
+    pub fn all_column_parts(&self) -> Vec<(String, u8, Vec<Columns>)> {
         let groups = self.instances(&[]);
         // Per subscription: its instance's index.
         let mut by_sub = vec![usize::MAX; self.subscriptions().len()];
@@ -952,16 +967,12 @@ impl Log<'_> {
             });
             builders
         };
-        let bounds: Vec<std::ops::Range<usize>> = (0..threads)
-            .map(|t| t * n / threads..(t + 1) * n / threads)
-            .collect();
         let mut parts: Vec<Vec<Option<ColumnBuilder>>> = if threads == 1 {
             vec![part(0..n)]
         } else {
             std::thread::scope(|s| {
-                let handles: Vec<_> = bounds
-                    .iter()
-                    .cloned()
+                let handles: Vec<_> = (0..threads)
+                    .map(|t| t * n / threads..(t + 1) * n / threads)
                     .map(|r| s.spawn(move || part(r)))
                     .collect();
                 handles
@@ -972,18 +983,18 @@ impl Log<'_> {
         };
         let mut out = Vec::with_capacity(groups.len());
         for (k, g) in groups.iter().enumerate() {
-            let mut joined: Option<Columns> = None;
-            for p in &mut parts {
-                if let Some(b) = p[k].as_mut() {
-                    let c = b.take();
-                    match &mut joined {
-                        None => joined = Some(c),
-                        Some(j) => j.append(c),
-                    }
-                }
+            let mut cols: Vec<Columns> = parts
+                .iter_mut()
+                .filter_map(|p| p[k].as_mut().map(ColumnBuilder::take))
+                .collect();
+            // The parts with rows (or one empty part, for an instance without a whole row).
+            if cols.iter().any(|c| c.rows() > 0) {
+                cols.retain(|c| c.rows() > 0);
+            } else {
+                cols.truncate(1);
             }
-            if let Some(c) = joined {
-                out.push((g[0].name.clone(), g[0].multi_id, c));
+            if !cols.is_empty() {
+                out.push((g[0].name.clone(), g[0].multi_id, cols));
             }
         }
         out

@@ -269,6 +269,17 @@ fn all_columns_in_one_pass_equal_each_instances_columns() {
     let all = log.all_columns();
     let names: Vec<(&str, u8)> = all.iter().map(|(t, m, _)| (t.as_str(), *m)).collect();
     assert_eq!(names, [("t", 0), ("t", 1), ("u", 0)]);
+    // Parts: on more than one core, an instance's rows in more than one part, in order.
+    let parts = log.all_column_parts();
+    assert_eq!(parts.len(), all.len());
+    for ((_, _, p), (_, _, joined)) in parts.iter().zip(&all) {
+        assert_eq!(p.iter().map(Columns::rows).sum::<usize>(), joined.rows());
+        let ts: Vec<u64> = p
+            .iter()
+            .flat_map(|c| c.get("timestamp").unwrap().as_uint64().unwrap().to_vec())
+            .collect();
+        assert_eq!(ts, joined.get("timestamp").unwrap().as_uint64().unwrap());
+    }
     for (topic, multi_id, cols) in &all {
         assert_eq!(
             cols,

@@ -257,9 +257,12 @@ pub fn read_mapped(
     read_releasing(file, options, Some(&release))
 }
 
+/// What a dataset's rows have room for when it is subscribed.
+const INITIAL_ROWS_BYTES: usize = 1 << 20;
+
 /// Bytes behind the reading that are given back at once, and how far behind it.
-const RELEASE_STEP: usize = 2 << 20;
-const RELEASE_MARGIN: usize = 256 << 10;
+const RELEASE_STEP: usize = 1 << 20;
+const RELEASE_MARGIN: usize = 128 << 10;
 
 fn read_releasing(
     data: &[u8],
@@ -619,7 +622,9 @@ impl<'a> Reader<'a> {
         }
         // Each subscription with rows is a dataset, the last subscribed first; then all
         // datasets by name and instance (a stable sort).
-        self.by_msg_id.iter_mut().for_each(|i| *i = 0);
+        for s in &self.subscriptions {
+            self.by_msg_id[usize::from(s.msg_id)] = 0;
+        }
         while let Some(s) = self.subscriptions.pop() {
             if !s.rows.is_empty() {
                 self.f.data.push(Dataset {
@@ -767,7 +772,10 @@ impl<'a> Reader<'a> {
                 timestamp_idx,
                 row_size,
                 timestamp_offset,
-                rows: Vec::new(),
+                // Room from the start for a MiB of rows (or the file): the allocator maps
+                // it apart and grows it in place, so growing leaves no copies behind (a
+                // page is resident only once a row is in it).
+                rows: Vec::with_capacity(self.data.len().min(INITIAL_ROWS_BYTES)),
             };
             match self.by_msg_id[usize::from(msg_id)] {
                 0 => {
