@@ -236,8 +236,8 @@ pub struct Report {
     pub bytes_out: u64,
     /// Every topic instance with rows, in order of first row.
     pub topics: Vec<TopicReport>,
-    /// Subscriptions not written (a topic dropped, or no row left in the window): topic,
-    /// instance.
+    /// Subscriptions not written (a topic dropped, no row left in the window, or a format
+    /// the log does not define): topic, instance.
     pub subscriptions_dropped: Vec<(String, u8)>,
     /// Formats not written (their topics dropped, and nothing nests them).
     pub formats_dropped: Vec<String>,
@@ -839,7 +839,10 @@ impl<W: Write> Pass<'_, W> {
 
     fn subscription(&mut self, sub: &Subscription, schema: &Schema) -> Result<(), RewriteError> {
         self.flag_bits(None)?;
-        let kept = self.topic_kept(&sub.name);
+        // A subscription of a format the log does not define (or cannot lay out) has no row
+        // a reader can read: written again, it would make the output invalid. Dropped, and
+        // said in the report as a dropped subscription.
+        let kept = self.topic_kept(&sub.name) && sub.format().is_some();
         let topic = match self
             .instances
             .iter()
