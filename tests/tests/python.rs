@@ -4,7 +4,8 @@
 //! module the one `cargo test --workspace` built (`target/<profile>/lib_ulog.so`, built
 //! here with `cargo build -p ulog-python` when it is missing) beside its Python sources,
 //! then pytest over every test file: pyulog side by side on the corpus, pyulog's own test
-//! suite, the native API, bad input, Spark (when Java is there).
+//! suite, the native API, bad input; and beside them, in a second pytest process, Spark
+//! (when Java is there).
 //!
 //! Without python3 (or a working `venv`) the test says so and passes, except under CI.
 
@@ -120,19 +121,48 @@ fn the_python_packages_tests_pass() {
         Ok(s) => s,
         Err(why) => panic!("the package could not be laid out: {why}"),
     };
-    let out = Command::new(&python)
-        .args(["-m", "pytest", "-q", "-p", "no:cacheprovider", "tests"])
-        .current_dir(root().join("python"))
-        .env("PYTHONPATH", &site)
-        .output()
-        .expect("pytest runs");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    let summary = stdout.lines().last().unwrap_or_default().to_owned();
-    eprintln!("python/tests: {summary}");
-    assert!(
-        out.status.success(),
-        "{}\n{}",
-        &stdout[stdout.len().saturating_sub(8000)..],
-        String::from_utf8_lossy(&out.stderr)
-    );
+    // Two pytest processes at once: the Spark test (a JVM, mostly waiting on it) beside
+    // all the others, so that the two cores are used.
+    let groups: [&[&str]; 2] = [
+        &["tests", "--ignore=tests/test_spark.py"],
+        &["tests/test_spark.py"],
+    ];
+    let running: Vec<_> = groups
+        .iter()
+        .map(|args| {
+            Command::new(&python)
+                .args(["-m", "pytest", "-q", "-p", "no:cacheprovider"])
+                .args(*args)
+                .current_dir(root().join("python"))
+                .env("PYTHONPATH", &site)
+                .stdout(std::process::Stdio::piped())
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .expect("pytest runs")
+        })
+        .collect();
+    let mut failed = Vec::new();
+    for (args, child) in groups.iter().zip(running) {
+        let out = child.wait_with_output().expect("pytest ends");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let summary = stdout.lines().last().unwrap_or_default().to_owned();
+        eprintln!("python/{}: {summary}", args[0]);
+        if !out.status.success() {
+            failed.push(format!(
+                "{}\n{}",
+                tail(&stdout, 8000),
+                tail(&String::from_utf8_lossy(&out.stderr), 4000)
+            ));
+        }
+    }
+    assert!(failed.is_empty(), "{}", failed.join("\n"));
+}
+
+/// The last `n` bytes of `text` or a little more, cut at a character boundary.
+fn tail(text: &str, n: usize) -> &str {
+    let mut start = text.len().saturating_sub(n);
+    while !text.is_char_boundary(start) {
+        start -= 1;
+    }
+    &text[start..]
 }
