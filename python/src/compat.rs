@@ -51,24 +51,34 @@ pub(crate) fn read_pyulog<'py>(
             let file = ulog_runtime::read::MappedFile::open(&path)
                 .map_err(|e| Err(format!("{path}: {e}")))?;
             let f = pyulog::read_mapped(&file, &options).map_err(Ok)?;
-            Ok(recovered(&file, f))
+            let f = recovered(&file, f);
+            trim_heap();
+            Ok(f)
         })
     } else {
         let bytes = source.cast::<PyBytes>()?.as_bytes();
-        py.detach(|| Ok(recovered(bytes, pyulog::read(bytes, &options).map_err(Ok)?)))
+        py.detach(|| {
+            let f = recovered(bytes, pyulog::read(bytes, &options).map_err(Ok)?);
+            trim_heap();
+            Ok(f)
+        })
     };
-    // The datasets grew by reallocation: the heap chunks they left are free but resident.
-    // Given back here, before the Python objects are made, a ULog peaks lower.
+    match read {
+        Ok(f) => to_dict(py, f),
+        Err(Err(io)) => Err(ULogIOError::new_err(io)),
+        Err(Ok(e)) => Err(raise(py, e)),
+    }
+}
+
+/// Gives the heap's free pages back to the system: the datasets grew by reallocation, and
+/// the chunks they left are free but resident. Done before the Python objects are made, a
+/// `ULog` peaks lower. (Called without the GIL.)
+fn trim_heap() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     #[allow(unsafe_code)]
     // SAFETY: malloc_trim only returns free memory of the allocator to the system.
     unsafe {
         libc::malloc_trim(0);
-    }
-    match read {
-        Ok(f) => to_dict(py, f),
-        Err(Err(io)) => Err(ULogIOError::new_err(io)),
-        Err(Ok(e)) => Err(raise(py, e)),
     }
 }
 

@@ -11,9 +11,9 @@ From a DataFrame of binary files (``spark.read.format("binaryFile").load(glob)``
   (``sys_name``, ``ver_sw``, ``ver_hw``, ``start_timestamp``, ``start_utc``, ``sha256``,
   ``duration_s``, ``dropouts``, ``dropout_ms``, ``rows``) and the flight analysis as JSON;
   a log that cannot be read is a row with its ``error``, never a failed job.
-- ``convert(spark, input_glob, output_path)``: the topics written as the hive layout
-  ``ulog parquet --layout hive`` makes (``topic=<t>/log=<l>/multi_id=<m>/``), and the
-  metadata table at ``output_path/metadata``.
+- ``convert(spark, input_glob, output_path, topics=None)``: the topics (all, or those
+  named) written as the hive layout ``ulog parquet --layout hive`` makes
+  (``topic=<t>/log=<l>/multi_id=<m>/``), and the metadata table at ``output_path/metadata``.
 
 One task reads each log (its memory bounded by the log's bytes and one table); each topic's
 DataFrame reads the logs again (reading is fast next to Spark's own work).
@@ -100,6 +100,8 @@ def topics(spark, files, names: Optional[Sequence[str]] = None):
     """One DataFrame per topic (only ``names`` if given) of the logs of ``files`` (a
     ``binaryFile`` DataFrame): a dict of topic to DataFrame."""
     logs = dict(_logs(files))
+    if isinstance(names, str):
+        names = [names]
     wanted = list(names) if names is not None else None
     unified = _schemas(spark, files, logs, wanted)
     out = {}

@@ -86,8 +86,15 @@ pub fn schema(spec: &ColumnSpec, topic: &str) -> SchemaRef {
 
 /// Columns as a record batch of `schema` (made by [`schema`] from the same spec).
 pub fn record_batch(schema: &SchemaRef, columns: Columns) -> Result<RecordBatch, ArrowError> {
+    let rows = columns.rows();
     let arrays: Vec<ArrayRef> = columns.into_values().into_iter().map(array).collect();
-    RecordBatch::try_new(schema.clone(), arrays)
+    // The row count given, so that columns of no field (a format of padding only) still
+    // make a batch of their rows.
+    RecordBatch::try_new_with_options(
+        schema.clone(),
+        arrays,
+        &arrow_array::RecordBatchOptions::new().with_row_count(Some(rows)),
+    )
 }
 
 /// One column's values as an Arrow array, without copying the numbers.
@@ -247,5 +254,26 @@ mod tests {
             .downcast_ref::<BooleanArray>()
             .unwrap();
         assert!(k.value(0));
+    }
+
+    #[test]
+    fn columns_of_no_field_make_a_batch_of_their_rows() {
+        // A format of padding only: no column to show, and the rows still counted.
+        let mut schema = crate::schema::Schema::new();
+        let id = schema
+            .insert("p:uint8_t[4] _padding0;".parse().unwrap())
+            .unwrap();
+        let spec = ColumnSpec::new(&mut schema, id).unwrap();
+        assert!(spec.columns().is_empty());
+        let s = super::schema(&spec, "p");
+        let mut b = super::super::ColumnBuilder::new(spec);
+        for _ in 0..3 {
+            b.push(&[0; 4], 1);
+        }
+        let cols = b.take();
+        let rows = cols.rows();
+        let batch = record_batch(&s, cols).unwrap();
+        assert_eq!((batch.num_columns(), batch.num_rows()), (0, 3));
+        assert_eq!(rows, 3);
     }
 }

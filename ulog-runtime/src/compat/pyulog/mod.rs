@@ -772,10 +772,7 @@ impl<'a> Reader<'a> {
                 timestamp_idx,
                 row_size,
                 timestamp_offset,
-                // Room from the start for a MiB of rows (or the file): the allocator maps
-                // it apart and grows it in place, so growing leaves no copies behind (a
-                // page is resident only once a row is in it).
-                rows: Vec::with_capacity(self.data.len().min(INITIAL_ROWS_BYTES)),
+                rows: Vec::new(),
             };
             match self.by_msg_id[usize::from(msg_id)] {
                 0 => {
@@ -816,6 +813,13 @@ impl<'a> Reader<'a> {
         if row.len() != sub.row_size {
             self.f.file_corrupt = true;
             return Ok(());
+        }
+        if sub.rows.capacity() == 0 {
+            // At its first row, room for a MiB of rows (or what is left of the file): a
+            // block of that size is mapped apart and grows in place, so growing leaves no
+            // copies behind (a page is resident only once a row is in it).
+            let left = self.data.len().saturating_sub(self.pos);
+            sub.rows.reserve(left.min(INITIAL_ROWS_BYTES));
         }
         sub.rows.extend_from_slice(row);
         let t = row
