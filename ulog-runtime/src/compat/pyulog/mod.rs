@@ -257,7 +257,7 @@ pub fn read_mapped(
     read_releasing(file, options, Some(&release))
 }
 
-/// What a dataset's rows have room for when it is subscribed.
+/// What a dataset's rows get room for at its first row (at most what is left of the file).
 const INITIAL_ROWS_BYTES: usize = 1 << 20;
 
 /// Bytes behind the reading that are given back at once, and how far behind it.
