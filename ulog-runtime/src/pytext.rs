@@ -1,5 +1,5 @@
 //! Numbers as Python (and numpy) print them, so that exports read like pyulog's output and
-//! parse back to the exact stored value.
+//! parse back to the exact stored value; and read them as Python's `int()` does.
 //!
 //! ```
 //! use ulog_runtime::pytext::{f32_text, f64_text};
@@ -104,6 +104,17 @@ mod tests {
     use super::*;
 
     #[test]
+    fn integers_read_as_pythons_int_reads_them() {
+        // What Python 3 says: int(" +1_000 ") == 1000, int("-7") == -7; the rest ValueError.
+        assert_eq!(python_int(" +1_000 \n"), Some(1000));
+        assert_eq!(python_int("-7"), Some(-7));
+        assert_eq!(python_int("007"), Some(7));
+        for bad in ["", "-", "_1", "1_", "1__0", "1.0", "0x10", "+-1", "1 2"] {
+            assert_eq!(python_int(bad), None, "{bad:?}");
+        }
+    }
+
+    #[test]
     fn like_python_and_numpy() {
         // Expected texts are Python's repr / numpy's str of the same values.
         for (x, text) in [
@@ -141,4 +152,21 @@ mod tests {
             x *= -3.7;
         }
     }
+}
+
+/// Python's `int()` of a text: an optional sign, decimal digits (single underscores between
+/// them), surrounding whitespace; `None` for anything else (or a number past `i128`).
+pub(crate) fn python_int(text: &str) -> Option<i128> {
+    let t = text.trim();
+    let digits = t.strip_prefix(['+', '-']).unwrap_or(t);
+    if digits.is_empty()
+        || digits.starts_with('_')
+        || digits.ends_with('_')
+        || digits.contains("__")
+        || !digits.chars().all(|c| c.is_ascii_digit() || c == '_')
+    {
+        return None;
+    }
+    let v: i128 = digits.replace('_', "").parse().ok()?;
+    Some(if t.starts_with('-') { -v } else { v })
 }

@@ -296,15 +296,8 @@ impl Sensors {
     /// `BAT_N_CELLS`), else the topic's `cell_count`, else estimated from the highest
     /// voltage (a cell holds at most 4.35 V).
     fn cells(meta: &Metadata, multi_id: u8, b: &BatteryAcc) -> Option<u32> {
-        let param = |name: &str| {
-            meta.parameter(name)
-                .map(crate::read::ParamValue::as_f64)
-                .filter(|n| *n > 0.0 && *n < 64.0)
-        };
         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
-        param(&format!("BAT{}_N_CELLS", u32::from(multi_id) + 1))
-            .or_else(|| (multi_id == 0).then(|| param("BAT_N_CELLS")).flatten())
-            .map(|n| n as u32)
+        super::diagnostics::brownout::cells_parameter(meta, multi_id)
             .or(b.cell_count)
             .or_else(|| b.max_voltage.map(|v| (v / 4.35).ceil().max(1.0) as u32))
     }

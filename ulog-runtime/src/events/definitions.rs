@@ -8,6 +8,8 @@ use std::marker::PhantomData;
 use std::sync::Arc;
 
 use serde::Deserialize;
+
+use crate::pytext::python_int;
 use serde::de::{self, MapAccess, Visitor};
 
 /// An event's definition.
@@ -194,23 +196,6 @@ impl EventDefinitions {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
-}
-
-/// Python's `int()` of a key: an optional sign, decimal digits (underscores between them),
-/// surrounding whitespace.
-fn python_int(s: &str) -> Option<i128> {
-    let t = s.trim();
-    let digits = t.strip_prefix(['+', '-']).unwrap_or(t);
-    if digits.is_empty()
-        || digits.starts_with('_')
-        || digits.ends_with('_')
-        || digits.contains("__")
-        || !digits.chars().all(|c| c.is_ascii_digit() || c == '_')
-    {
-        return None;
-    }
-    let v: i128 = digits.replace('_', "").parse().ok()?;
-    Some(if t.starts_with('-') { -v } else { v })
 }
 
 /// Why a metadata JSON could not be read.

@@ -570,7 +570,7 @@ impl<'a> Reader<'a> {
                     } else {
                         ""
                     };
-                    let n = python_int(inner).ok_or(Raise::Corrupt)?;
+                    let n = crate::pytext::python_int(inner).ok_or(Raise::Corrupt)?;
                     if !(0..=0xFFFF).contains(&n) {
                         return Err(Raise::Corrupt);
                     }
@@ -983,27 +983,6 @@ fn unpack(ty: &str, b: &[u8]) -> PyValue {
         "bool" => PyValue::Bool(b[0] != 0),
         _ => PyValue::Bytes(b.to_vec()),
     }
-}
-
-/// Python's `int(text)` of a base-10 literal: spaces around, a sign, digits with single
-/// underscores between them.
-fn python_int(text: &str) -> Option<i64> {
-    let t = text.trim_matches(|c: char| c.is_whitespace());
-    let (neg, digits) = match t.as_bytes().first() {
-        Some(b'-') => (true, &t[1..]),
-        Some(b'+') => (false, &t[1..]),
-        _ => (false, t),
-    };
-    if digits.is_empty()
-        || digits.starts_with('_')
-        || digits.ends_with('_')
-        || digits.contains("__")
-        || !digits.chars().all(|c| c.is_ascii_digit() || c == '_')
-    {
-        return None;
-    }
-    let n: i64 = digits.replace('_', "").parse().ok()?;
-    Some(if neg { -n } else { n })
 }
 
 /// pyulog's `parse_string`: UTF-8, invalid bytes left out (or an error when strict).
