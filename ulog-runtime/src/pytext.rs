@@ -99,6 +99,23 @@ fn python_style(sci: &str, positional: bool) -> String {
     }
 }
 
+/// Python's `int()` of a text: an optional sign, decimal digits (single underscores between
+/// them), surrounding whitespace; `None` for anything else (or a number past `i128`).
+pub(crate) fn python_int(text: &str) -> Option<i128> {
+    let t = text.trim();
+    let digits = t.strip_prefix(['+', '-']).unwrap_or(t);
+    if digits.is_empty()
+        || digits.starts_with('_')
+        || digits.ends_with('_')
+        || digits.contains("__")
+        || !digits.chars().all(|c| c.is_ascii_digit() || c == '_')
+    {
+        return None;
+    }
+    let v: i128 = digits.replace('_', "").parse().ok()?;
+    Some(if t.starts_with('-') { -v } else { v })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -152,21 +169,4 @@ mod tests {
             x *= -3.7;
         }
     }
-}
-
-/// Python's `int()` of a text: an optional sign, decimal digits (single underscores between
-/// them), surrounding whitespace; `None` for anything else (or a number past `i128`).
-pub(crate) fn python_int(text: &str) -> Option<i128> {
-    let t = text.trim();
-    let digits = t.strip_prefix(['+', '-']).unwrap_or(t);
-    if digits.is_empty()
-        || digits.starts_with('_')
-        || digits.ends_with('_')
-        || digits.contains("__")
-        || !digits.chars().all(|c| c.is_ascii_digit() || c == '_')
-    {
-        return None;
-    }
-    let v: i128 = digits.replace('_', "").parse().ok()?;
-    Some(if t.starts_with('-') { -v } else { v })
 }
