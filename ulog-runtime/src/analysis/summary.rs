@@ -97,9 +97,11 @@ impl fmt::Display for Analysis {
         let g = &self.gps_quality;
         writeln!(
             f,
-            "GPS: satellites {}-{}, max hdop {}, max eph {}, max epv {}, fix types {:?}{}",
-            g.min_satellites.map_or("-".to_owned(), |s| s.to_string()),
-            g.max_satellites.map_or("-".to_owned(), |s| s.to_string()),
+            "GPS: satellites {}, max hdop {}, max eph {}, max epv {}, fix types {:?}{}",
+            match (g.min_satellites, g.max_satellites) {
+                (Some(lo), Some(hi)) => format!("{lo}-{hi}"),
+                _ => "-".to_owned(),
+            },
             opt(g.max_hdop, ""),
             opt(g.max_eph_m, "m"),
             opt(g.max_epv_m, "m"),
