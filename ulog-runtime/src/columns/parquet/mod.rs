@@ -31,10 +31,12 @@ mod tests;
 use std::io::Write;
 
 use parquet::arrow::ArrowWriter;
+use parquet::arrow::arrow_writer::{ArrowRowGroupWriterFactory, compute_leaves};
 use parquet::basic::{Compression, ZstdLevel};
 use parquet::errors::ParquetError;
 use parquet::file::metadata::KeyValue;
 use parquet::file::properties::{EnabledStatistics, WriterProperties};
+use parquet::file::writer::SerializedFileWriter;
 
 pub use convert::{Conversion, ConvertError, Converter, WrittenFile};
 
@@ -53,14 +55,16 @@ pub struct ParquetOptions {
     /// Most rows in one row group.
     pub row_group_rows: usize,
     /// Memory for the rows waiting for their row group, all tables of one log together:
-    /// when they pass it, the table holding most is encoded and written as a row group.
-    /// A conversion's memory is this, plus while a row group is encoded its encoded pages
-    /// and a ZSTD context per column (a few hundred KB each for columns of many rows), plus
-    /// per table the batch being filled ([`ParquetOptions::batch_bytes`]) and the footer
-    /// metadata of its row groups so far, plus what the log says besides its rows
-    /// (formats, parameters, logged messages, parameter changes, dropouts: kept for
-    /// `metadata.json`). On the 400 MB benchmark log (70 tables) the whole process peaks
-    /// at 53 MiB with the default 16 MiB.
+    /// when they pass it, the table holding most bytes per column is encoded and written as
+    /// a row group. A conversion's memory is this, plus while a row group is encoded one
+    /// column chunk's encoded pages and ZSTD workspace at a time (row groups are encoded a
+    /// column at a time) and a decompression context per column of that table (parquet-rs
+    /// makes one per column chunk, about 50 KB), plus per table the batch being filled
+    /// ([`ParquetOptions::batch_bytes`]) and the footer metadata of its row groups so far,
+    /// plus what the log says besides its rows (formats, parameters, logged messages,
+    /// parameter changes, dropouts: kept for `metadata.json`), plus the flight analysis's
+    /// state when it is on. On the 400 MB benchmark log (70 tables) the whole process
+    /// peaks at about 52 MiB with the default 16 MiB.
     pub buffer_bytes: usize,
     /// Row data collected per topic instance before it is made an Arrow record batch (at
     /// least one row).
@@ -427,15 +431,19 @@ impl Admission {
 }
 
 /// One table being written: batches of columns held until they make a row group, each
-/// row group encoded and written at once, the file begun only with the first row group. (A
-/// row group in progress holds a ZSTD context per column, a few hundred kilobytes each
-/// once it has compressed a page: encoding row groups one at a time, instead of keeping
-/// one open per table, keeps a log of thousands of columns within its budget.)
+/// row group encoded and written at once, the file begun only with the first row group.
+///
+/// A row group is encoded one column at a time: a column's chunk is encoded from every
+/// batch, closed and written before the next column's is begun, so that only one column's
+/// ZSTD workspace (a few hundred kilobytes once it has compressed a page) and encoded pages
+/// are held at a time, whatever the number of columns. (The writer's `ArrowWriter::write`
+/// encodes every column of a batch at once, holding a workspace and the encoded pages of
+/// every column until the row group is closed.)
 struct Table<W: Write + Send> {
     schema: arrow_schema::SchemaRef,
     /// The writer, once the first row group is written; until then its output and
     /// properties.
-    writer: Option<ArrowWriter<W>>,
+    writer: Option<(SerializedFileWriter<W>, ArrowRowGroupWriterFactory)>,
     out: Option<(W, WriterProperties)>,
     properties_error: Option<ParquetError>,
     row_group_rows: usize,
@@ -483,6 +491,8 @@ impl<W: Write + Send> Table<W> {
         if self.pending_rows > 0 && self.pending_rows + rows > self.row_group_rows {
             self.write_row_group()?;
         }
+        // Callers make batches of at most `row_group_rows` rows.
+        debug_assert!(rows <= self.row_group_rows);
         let batch = record_batch(&self.schema, columns)?;
         self.pending_bytes += batch.get_array_memory_size();
         self.pending_rows += rows;
@@ -491,35 +501,66 @@ impl<W: Write + Send> Table<W> {
         Ok(())
     }
 
+    /// Its columns: each row group holds a chunk of each, encoded with a ZSTD context of
+    /// its own.
+    fn columns(&self) -> usize {
+        self.schema.fields().len()
+    }
+
     /// Memory the table holds: its batches waiting for their row group.
     fn memory(&self) -> usize {
         self.pending_bytes
     }
 
-    /// The writer, made on first use.
-    fn writer(&mut self) -> Result<&mut ArrowWriter<W>, ParquetError> {
+    /// The writer, made on first use (through `ArrowWriter`, which stores the Arrow
+    /// schema in the file's metadata).
+    fn writer(
+        &mut self,
+    ) -> Result<&mut (SerializedFileWriter<W>, ArrowRowGroupWriterFactory), ParquetError> {
         if self.writer.is_none() {
             if let Some(e) = self.properties_error.take() {
                 return Err(e);
             }
             let (out, props) = self.out.take().expect("an output until the writer is made");
-            self.writer = Some(ArrowWriter::try_new(out, self.schema.clone(), Some(props))?);
+            let writer = ArrowWriter::try_new(out, self.schema.clone(), Some(props))?;
+            self.writer = Some(writer.into_serialized_writer()?);
         }
         Ok(self.writer.as_mut().expect("just made"))
     }
 
-    /// Encodes and writes the pending batches as one row group, then flushes the output.
+    /// Encodes and writes the pending batches as one row group, a column at a time, then
+    /// flushes the output.
     fn write_row_group(&mut self) -> Result<(), ParquetError> {
         if self.pending.is_empty() {
             return Ok(());
         }
         let pending = std::mem::take(&mut self.pending);
-        let writer = self.writer()?;
-        for batch in &pending {
-            writer.write(batch)?;
+        let schema = self.schema.clone();
+        let (file, factory) = self.writer()?;
+        let mut writers = factory
+            .create_column_writers(file.flushed_row_groups().len())?
+            .into_iter();
+        let mut row_group = file.next_row_group()?;
+        for (i, field) in schema.fields().iter().enumerate() {
+            // A field is one Parquet leaf column, or several for a nested type.
+            let mut field_writers = Vec::new();
+            for batch in &pending {
+                let leaves = compute_leaves(field, batch.column(i))?;
+                while field_writers.len() < leaves.len() {
+                    field_writers.push(writers.next().ok_or_else(|| {
+                        ParquetError::General(format!("no column writer left for {}", field.name()))
+                    })?);
+                }
+                for (writer, leaf) in field_writers.iter_mut().zip(&leaves) {
+                    writer.write(leaf)?;
+                }
+            }
+            for writer in field_writers {
+                writer.close()?.append_to_row_group(&mut row_group)?;
+            }
         }
-        writer.flush()?;
-        writer.sync()?;
+        row_group.close()?;
+        file.flush()?;
         self.pending_rows = 0;
         self.pending_bytes = 0;
         Ok(())
@@ -531,9 +572,9 @@ impl<W: Write + Send> Table<W> {
     }
 
     /// The output, once the file is begun (to close a file handle between row groups:
-    /// the writer is synced after each).
+    /// the writer is flushed after each).
     fn output(&mut self) -> Option<&mut W> {
-        self.writer.as_mut().map(ArrowWriter::inner_mut)
+        self.writer.as_mut().map(|(file, _)| file.inner_mut())
     }
 
     /// Writes what is left and the footer, with the log's identity; a table without rows
@@ -553,11 +594,11 @@ impl<W: Write + Send> Table<W> {
                 },
             ));
         }
-        let writer = self.writer()?;
+        let (file, _) = self.writer()?;
         for kv in identity.key_values() {
-            writer.append_key_value_metadata(kv);
+            file.append_key_value_metadata(kv);
         }
-        let meta = writer.finish()?;
+        let meta = file.finish()?;
         Ok((
             true,
             TableWritten {

@@ -213,6 +213,15 @@ fn a_small_budget_writes_more_row_groups_of_the_same_rows() {
             },
             [7, 4],
         ),
+        (
+            // Row groups shorter than a batch of 64 KiB (thousands of rows).
+            "budget-rows-within-a-batch",
+            ParquetOptions {
+                row_group_rows: 500,
+                ..ParquetOptions::default()
+            },
+            [40, 20],
+        ),
     ] {
         let root = temp(name);
         let conv = Converter::new(&root, options)
