@@ -48,6 +48,7 @@ pub(crate) fn read_pyulog<'py>(
     let read = if let Ok(path) = source.cast::<PyString>() {
         let path = path.to_string();
         py.detach(|| {
+            trim_heap();
             let file = ulog_runtime::read::MappedFile::open(&path)
                 .map_err(|e| Err(format!("{path}: {e}")))?;
             let f = pyulog::read_mapped(&file, &options).map_err(Ok)?;
@@ -58,6 +59,7 @@ pub(crate) fn read_pyulog<'py>(
     } else {
         let bytes = source.cast::<PyBytes>()?.as_bytes();
         py.detach(|| {
+            trim_heap();
             let f = recovered(bytes, pyulog::read(bytes, &options).map_err(Ok)?);
             trim_heap();
             Ok(f)
@@ -70,9 +72,10 @@ pub(crate) fn read_pyulog<'py>(
     }
 }
 
-/// Gives the heap's free pages back to the system: the datasets grew by reallocation, and
-/// the chunks they left are free but resident. Done before the Python objects are made, a
-/// `ULog` peaks lower. (Called without the GIL.)
+/// Gives the heap's free pages back to the system (the whole process's: what the
+/// interpreter freed, after its imports, say, as well as what reading left). Done before
+/// reading and again before the Python objects are made, a `ULog` peaks lower: the rows
+/// come on top of less. (Called without the GIL.)
 fn trim_heap() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     #[allow(unsafe_code)]

@@ -74,12 +74,24 @@ impl MappedFile {
         Ok((summary(metadata, all), parts))
     }
 
-    /// Drops the pages of `[from, to)` from the process (whole pages only).
-    pub(crate) fn release(&self, from: u64, to: u64) {
+    /// Asks the kernel to map the file's pages one by one (`MADV_NOHUGEPAGE`), not in 2 MiB
+    /// blocks when the page cache holds the file in large folios: for a walk that gives its
+    /// pages back behind it ([`MappedFile::release`]), so that what is resident ahead of it
+    /// stays a few pages. A kernel that does not know the advice leaves the map as it is.
+    pub(crate) fn map_small_pages(&self) {
+        #[cfg(target_os = "linux")]
+        let _ = self.map.advise(memmap2::Advice::NoHugePage);
+    }
+
+    /// Drops the pages of `[from, to)` from the process (whole pages only); returns where
+    /// the pages it dropped end (`to` down to a page boundary, at least `from`), which is
+    /// where the next release of the walk starts: a page `to` cuts is released next time,
+    /// not skipped.
+    pub(crate) fn release(&self, from: u64, to: u64) -> u64 {
         const PAGE: u64 = 4096;
-        let from = from.div_ceil(PAGE) * PAGE;
+        let from_page = from.div_ceil(PAGE) * PAGE;
         let to = to / PAGE * PAGE;
-        if to > from {
+        if to > from_page {
             // SAFETY: the map is shared and read-only, so MADV_DONTNEED only drops this
             // process's references to the pages: a later read faults the file's own bytes
             // back in, unchanged. (It is unsafe in general because a private writable map
@@ -88,11 +100,12 @@ impl MappedFile {
             let _ = unsafe {
                 self.map.unchecked_advise_range(
                     memmap2::UncheckedAdvice::DontNeed,
-                    from as usize,
-                    (to - from) as usize,
+                    from_page as usize,
+                    (to - from_page) as usize,
                 )
             };
         }
+        to.max(from)
     }
 }
 
@@ -106,7 +119,7 @@ impl std::ops::Deref for MappedFile {
 /// A sink that gives pages back behind the rows it takes.
 struct Releasing<'r, S> {
     inner: S,
-    release: &'r (dyn Fn(u64, u64) + Sync),
+    release: &'r (dyn Fn(u64, u64) -> u64 + Sync),
     /// Where this thread's walk released up to (`None` before its first row).
     done: Option<u64>,
 }
@@ -117,9 +130,7 @@ impl<S: RowSink> RowSink for Releasing<'_, S> {
         self.inner.row(meta, offset, data, sub, timestamp);
         let done = *self.done.get_or_insert(offset);
         if offset >= done + RELEASE_STEP + RELEASE_MARGIN {
-            let to = offset - RELEASE_MARGIN;
-            (self.release)(done, to);
-            self.done = Some(to);
+            self.done = Some((self.release)(done, offset - RELEASE_MARGIN));
         }
     }
     fn len(&self) -> usize {
@@ -134,5 +145,105 @@ impl<S: RowSink> RowSink for Releasing<'_, S> {
     }
     fn append(&mut self, other: Self) {
         self.inner.append(other.inner);
+    }
+}
+
+#[cfg(all(test, target_os = "linux", feature = "derive"))]
+mod tests {
+    use super::*;
+    use crate::{ULog, Writer, WriterOptions};
+
+    #[derive(ULog)]
+    struct Sample {
+        timestamp: u64,
+        value: [f32; 6],
+    }
+
+    /// A log of about 20 MB in a file of its own (removed on drop).
+    struct BigLog(std::path::PathBuf);
+
+    impl BigLog {
+        fn new(name: &str) -> BigLog {
+            let path =
+                std::env::temp_dir().join(format!("ulog-mapped-{name}-{}.ulg", std::process::id()));
+            let file = std::io::BufWriter::new(std::fs::File::create(&path).unwrap());
+            let mut w = Writer::new(file, WriterOptions::default()).unwrap();
+            let topic = w.topic::<Sample>(0).unwrap();
+            for t in 0..560_000u64 {
+                let s = Sample {
+                    timestamp: t,
+                    value: [t as f32; 6],
+                };
+                w.write(&topic, &s).unwrap();
+            }
+            w.into_inner().into_inner().unwrap().sync_all().unwrap();
+            BigLog(path)
+        }
+    }
+
+    impl Drop for BigLog {
+        fn drop(&mut self) {
+            let _ = std::fs::remove_file(&self.0);
+        }
+    }
+
+    /// Offsets of the pages of `bytes` this process has mapped in (`/proc/self/pagemap`:
+    /// bit 63 of a page's entry says it is present).
+    fn resident_pages(bytes: &[u8]) -> Vec<u64> {
+        use std::io::{Read, Seek, SeekFrom};
+        const PAGE: u64 = 4096;
+        let base = bytes.as_ptr() as u64;
+        assert_eq!(base % PAGE, 0, "a map starts on a page");
+        let pages = (bytes.len() as u64).div_ceil(PAGE);
+        let mut map = std::fs::File::open("/proc/self/pagemap").unwrap();
+        map.seek(SeekFrom::Start(base / PAGE * 8)).unwrap();
+        let mut entries = vec![0u8; pages as usize * 8];
+        map.read_exact(&mut entries).unwrap();
+        entries
+            .chunks_exact(8)
+            .enumerate()
+            .filter(|(_, e)| u64::from_le_bytes((*e).try_into().unwrap()) >> 63 == 1)
+            .map(|(i, _)| i as u64 * PAGE)
+            .collect()
+    }
+
+    /// After a walk, the pages still mapped are the walk's last step or the page before
+    /// its first row: none is left behind in the middle of the file.
+    fn only_the_tail_is_resident(file: &MappedFile, tail: u64, what: &str) {
+        let len = file.len() as u64;
+        let behind: Vec<u64> = resident_pages(file)
+            .into_iter()
+            .filter(|&p| p != 0 && p + tail < len)
+            .collect();
+        assert!(
+            behind.is_empty(),
+            "{what}: {} pages behind the walk stayed mapped, the first at {:?} of {len}",
+            behind.len(),
+            behind.first()
+        );
+    }
+
+    #[test]
+    fn a_mapped_walk_gives_back_every_page_behind_it() {
+        let log = BigLog::new("fold");
+        let file = MappedFile::open(&log.0).unwrap();
+        let (summary, counts) = file.fold_rows_on(1, || 0u64, |n, _| *n += 1).unwrap();
+        assert_eq!(counts.iter().sum::<u64>(), 560_000);
+        assert_eq!(summary.rows, 560_000);
+        // The last step and margin, and what the kernel maps around a fault (64 KiB).
+        only_the_tail_is_resident(
+            &file,
+            RELEASE_STEP + RELEASE_MARGIN + (64 << 10),
+            "fold_rows",
+        );
+    }
+
+    #[test]
+    fn pyulogs_reading_of_a_mapped_file_gives_back_every_page_behind_it() {
+        let log = BigLog::new("pyulog");
+        let file = MappedFile::open(&log.0).unwrap();
+        let f = crate::compat::pyulog::read_mapped(&file, &Default::default()).unwrap();
+        assert_eq!(f.data[0].rows.len(), 560_000 * 32);
+        only_the_tail_is_resident(&file, 1 << 20, "compat::pyulog::read_mapped");
     }
 }

@@ -253,6 +253,7 @@ pub fn read_mapped(
     file: &crate::read::MappedFile,
     options: &PyulogOptions,
 ) -> Result<PyulogFile, PyulogError> {
+    file.map_small_pages();
     let release = |from: u64, to: u64| file.release(from, to);
     read_releasing(file, options, Some(&release))
 }
@@ -260,14 +261,17 @@ pub fn read_mapped(
 /// What a dataset's rows get room for at its first row (at most what is left of the file).
 const INITIAL_ROWS_BYTES: usize = 1 << 20;
 
-/// Bytes behind the reading that are given back at once, and how far behind it.
-const RELEASE_STEP: usize = 1 << 20;
-const RELEASE_MARGIN: usize = 128 << 10;
+/// Bytes behind the reading that are given back at once, and how far behind it. (What is
+/// given back is never needed again but for a seek back to an appended segment's offset
+/// within the last message, which reads the page again from the file: small steps keep
+/// the file's share of the peak memory small, at one `madvise` per step.)
+const RELEASE_STEP: usize = 256 << 10;
+const RELEASE_MARGIN: usize = 16 << 10;
 
 fn read_releasing(
     data: &[u8],
     options: &PyulogOptions,
-    release: Option<&dyn Fn(u64, u64)>,
+    release: Option<&dyn Fn(u64, u64) -> u64>,
 ) -> Result<PyulogFile, PyulogError> {
     let mut r = Reader {
         data,
@@ -331,7 +335,7 @@ struct Reader<'a> {
     /// The file position, relative to the bytes' start (may be past their end).
     pos: usize,
     /// Gives back the pages of a range of `data` (a mapped file's), and up to where it has.
-    release: Option<&'a dyn Fn(u64, u64)>,
+    release: Option<&'a dyn Fn(u64, u64) -> u64>,
     released: usize,
     options: &'a PyulogOptions,
     f: PyulogFile,
@@ -589,9 +593,8 @@ impl<'a> Reader<'a> {
             if let Some(release) = self.release
                 && start >= self.released + RELEASE_STEP + RELEASE_MARGIN
             {
-                let to = start - RELEASE_MARGIN;
-                release(self.released as u64, to as u64);
-                self.released = to;
+                let to = release(self.released as u64, (start - RELEASE_MARGIN) as u64);
+                self.released = usize::try_from(to).unwrap_or(start);
             }
             let head = self.read(3);
             curr += head.len() as u64;
