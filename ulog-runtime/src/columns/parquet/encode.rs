@@ -46,7 +46,7 @@ impl<W: Output> TableWork<W> {
         result
     }
 
-    /// Closes the file between row groups (each is synced as written).
+    /// Closes the file between row groups (each is flushed as written).
     fn release(&mut self) {
         if let Some(out) = self.table.output() {
             out.release();

@@ -113,7 +113,6 @@ impl ParquetOptions {
     pub fn properties(&self, metadata: Vec<KeyValue>) -> Result<WriterProperties, ParquetError> {
         Ok(WriterProperties::builder()
             .set_compression(Compression::ZSTD(ZstdLevel::try_new(self.zstd_level)?))
-            .set_max_row_group_row_count(Some(self.row_group_rows.max(1)))
             .set_dictionary_enabled(self.dictionary)
             .set_data_page_size_limit(64 << 10)
             .set_statistics_enabled(if self.page_statistics {
@@ -535,6 +534,8 @@ impl<W: Write + Send> Table<W> {
             return Ok(());
         }
         let pending = std::mem::take(&mut self.pending);
+        self.pending_rows = 0;
+        self.pending_bytes = 0;
         let schema = self.schema.clone();
         let (file, factory) = self.writer()?;
         let mut writers = factory
@@ -561,8 +562,6 @@ impl<W: Write + Send> Table<W> {
         }
         row_group.close()?;
         file.flush()?;
-        self.pending_rows = 0;
-        self.pending_bytes = 0;
         Ok(())
     }
 

@@ -247,7 +247,9 @@ pub fn read(data: &[u8], options: &PyulogOptions) -> Result<PyulogFile, PyulogEr
 }
 
 /// [`read`] of a memory-mapped file, its pages given back to the kernel behind the reading
-/// (so that the process holds the rows, not the file and the rows).
+/// (so that the process holds the rows, not the file and the rows). The map is from then on
+/// mapped in small pages, never 2 MiB blocks (`MADV_NOHUGEPAGE`), so that little of the file
+/// is resident ahead of the reading.
 #[cfg(feature = "mmap")]
 pub fn read_mapped(
     file: &crate::read::MappedFile,
