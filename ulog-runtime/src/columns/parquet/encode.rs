@@ -270,9 +270,9 @@ impl<W: Output> Encoder<W> {
 
     /// While the tables hold more than the budget, writes the table holding most bytes per
     /// column, of those no other worker holds, as a row group. (parquet-rs makes a
-    /// compression and a decompression context per column chunk; on a virtual machine each
-    /// context's six `CPUID` instructions trap to the hypervisor: about 47 µs a column chunk
-    /// on a 2-core KVM Xeon, where one `CPUID` took 7.8 µs.)
+    /// compression and a decompression context per column chunk, and each runs `CPUID`
+    /// three times, which on a virtual machine traps to the hypervisor: 7.8 µs a `CPUID` on
+    /// a 2-core KVM Xeon, where making the contexts took 9.6% of a conversion's CPU.)
     fn within_budget<'a>(
         &'a self,
         mut st: MutexGuard<'a, State<W>>,
