@@ -43,6 +43,8 @@ pub(crate) struct Modes {
     flights: Vec<Interval>,
     /// Mode changes in order (time, nav_state), for the mode at any time.
     changes: Vec<(u64, u8)>,
+    /// The latest `vehicle_status` time: the open segments last at least until then.
+    last_status: u64,
 }
 
 impl Modes {
@@ -53,6 +55,7 @@ impl Modes {
         armed: bool,
         vtol: Option<&'static str>,
     ) {
+        self.last_status = self.last_status.max(t);
         if let Some(n) = nav
             && self.mode.is_none_or(|(_, m)| m != n)
         {
@@ -105,7 +108,9 @@ impl Modes {
         k.checked_sub(1).map(|k| self.changes[k].1)
     }
 
-    /// Closes the open segments at `end` (the last row's time).
+    /// Closes the open segments at `end` (the last row's time), or at the latest
+    /// `vehicle_status` time if that is later (the last row of a damaged or cut log may be
+    /// an old one of another topic).
     #[allow(clippy::type_complexity)]
     pub(super) fn finish(
         &self,
@@ -118,6 +123,7 @@ impl Modes {
         Vec<Interval>,
         Vec<Interval>,
     ) {
+        let end = end.max(self.last_status);
         let mut modes = self.modes.clone();
         if let Some((start, m)) = self.mode {
             modes.push(segment(m, start, end.max(start)));

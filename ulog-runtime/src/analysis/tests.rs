@@ -548,3 +548,41 @@ fn what_a_log_lacks_is_said() {
     }
     assert!(a.diagnostics.is_empty());
 }
+
+#[test]
+fn the_last_mode_lasts_until_the_last_status_even_when_an_older_row_ends_the_log() {
+    // A cut log whose last row is an old one of another topic (seen on `sample.ulg` cut
+    // in half: a `commander_state` row from before the log's start ended it).
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    let status = w.topic::<VehicleStatus>(0).unwrap();
+    let attitude = w.topic::<VehicleAttitude>(0).unwrap();
+    for (t, nav) in [(10_000_000, 0u8), (20_000_000, 2), (30_000_000, 2)] {
+        let s = VehicleStatus {
+            timestamp: t,
+            nav_state: nav,
+            arming_state: 1,
+            vehicle_type: 1,
+            is_vtol: false,
+            in_transition_mode: false,
+        };
+        w.write(&status, &s).unwrap();
+    }
+    let old = VehicleAttitude {
+        timestamp: 2_000_000,
+        q: [1.0, 0.0, 0.0, 0.0],
+    };
+    w.write(&attitude, &old).unwrap();
+    let a = Analysis::of_log(&Log::from_vec(w.into_inner()).unwrap());
+    let modes: Vec<(&str, u64, u64)> = a
+        .flight_modes
+        .iter()
+        .map(|m| (m.mode.as_str(), m.start_us, m.end_us))
+        .collect();
+    assert_eq!(
+        modes,
+        [
+            ("Manual", 10_000_000, 20_000_000),
+            ("Position", 20_000_000, 30_000_000)
+        ]
+    );
+}

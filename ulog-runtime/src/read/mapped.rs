@@ -28,9 +28,17 @@ const RELEASE_STEP: u64 = 8 << 20;
 const RELEASE_MARGIN: u64 = 256 << 10;
 
 impl MappedFile {
-    /// Maps a file.
+    /// Maps a file. A folder is an error of kind `IsADirectory` ("is a folder, not a log
+    /// file"), not the map's "no such device".
     pub fn open(path: impl AsRef<Path>) -> Result<MappedFile, ReadError> {
         let file = std::fs::File::open(path)?;
+        if file.metadata()?.is_dir() {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::IsADirectory,
+                "is a folder, not a log file",
+            )
+            .into());
+        }
         // SAFETY: the map is only read; the caller is told not to truncate the file meanwhile,
         // which is the contract of every memory-mapped file reader.
         #[allow(unsafe_code)]
@@ -241,6 +249,14 @@ mod tests {
             behind.len(),
             behind.first()
         );
+    }
+
+    #[test]
+    fn a_folder_is_not_mapped() {
+        let e = MappedFile::open(std::env::temp_dir()).unwrap_err();
+        let ReadError::Io(e) = e else { panic!("{e:?}") };
+        assert_eq!(e.kind(), std::io::ErrorKind::IsADirectory);
+        assert_eq!(e.to_string(), "is a folder, not a log file");
     }
 
     #[test]

@@ -8,7 +8,9 @@
 //!   one of two [`Layout`]s; many logs in parallel ([`Converter::convert_files`]).
 //!
 //! Every file's key-value metadata (what DuckDB's `parquet_kv_metadata` and pyarrow's
-//! `schema.metadata` show) holds:
+//! `pyarrow.parquet.read_metadata(path).metadata` show; the stored Arrow schema's own
+//! metadata, pyarrow's `schema.metadata`, holds only `ulog.topic` and `ulog.format`) holds,
+//! each key only when the log has its value:
 //!
 //! | key | value |
 //! |---|---|
