@@ -2,6 +2,7 @@
 copy) equal to pyulog's columns, the log's metadata, Parquet, the command-line tool, and
 threads reading at once."""
 
+import io
 import json
 import subprocess
 import sys
@@ -115,8 +116,16 @@ def test_the_log_says_what_the_reader_read():
     assert any("Takeoff detected" in text for _, _, text in lines)
     a = log.analysis()
     assert a["flight_modes"] and "field_stats" in a
-    # Bytes work as a path does.
+    # Bytes work as a path does, and so do binary file objects (read from their position).
     assert ulog.open(path.read_bytes()).topics() == log.topics()
+    with open(path, "rb") as f:
+        assert ulog.open(f).topics() == log.topics()
+    assert ulog.open(io.BytesIO(path.read_bytes())).topics() == log.topics()
+    with pytest.raises(TypeError, match="binary file object"):
+        with open(path, "r", encoding="latin-1") as f:
+            ulog.open(f)
+    with pytest.raises(TypeError, match="not int"):
+        ulog.open(3)
 
 
 def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):

@@ -2,9 +2,9 @@
 
 - ``ulog.ULog``: pyulog 1.3.0's ``ULog``, the same attributes and answers, many times faster
   (``from ulog import ULog`` instead of ``from pyulog import ULog``).
-- ``ulog.open(path_or_bytes)``: a ``Log`` with everything the reader recovers, its topics as
-  Arrow tables (``log.table("vehicle_attitude")``) that pyarrow, Polars and DuckDB take
-  without a copy.
+- ``ulog.open(path_or_bytes)`` (or a binary file object): a ``Log`` with everything the
+  reader recovers, its topics as Arrow tables (``log.table("vehicle_attitude")``) that
+  pyarrow, Polars and DuckDB take without a copy.
 - ``ulog.to_parquet(paths, out_dir)``: per-topic Parquet files and a ``metadata.json`` per
   log, as ``ulog parquet`` writes them.
 - ``ulog.spark``: the same on Apache Spark (needs pyspark).

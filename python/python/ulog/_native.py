@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 import os
-from typing import Any, Dict, List, Optional, Sequence, Union
+from typing import Any, BinaryIO, Dict, List, Optional, Sequence, Union
 
 from . import _ulog
 
@@ -171,9 +171,23 @@ class Log:
         return repr(self._native)
 
 
-def open(source: Union[str, "os.PathLike[str]", bytes, bytearray, memoryview]) -> Log:  # noqa: A001
-    """Opens a log: a path (memory-mapped, not read into memory) or the file's bytes."""
+def open(  # noqa: A001
+    source: Union[str, "os.PathLike[str]", bytes, bytearray, memoryview, BinaryIO],
+) -> Log:
+    """Opens a log: a path (memory-mapped, not read into memory), the file's bytes, or a
+    binary file object (read from its position to its end, into memory)."""
     if isinstance(source, (bytearray, memoryview)):
+        source = bytes(source)
+    elif not isinstance(source, (str, bytes, os.PathLike)):
+        read = getattr(source, "read", None)
+        if read is None:
+            raise TypeError(
+                "ulog.open takes a path, the file's bytes or a binary file object, not "
+                f"{type(source).__name__}"
+            )
+        source = read()
+        if not isinstance(source, (bytes, bytearray, memoryview)):
+            raise TypeError("ulog.open needs a binary file object (opened with 'rb')")
         source = bytes(source)
     return Log(_ulog.Log.open(source))
 
