@@ -48,22 +48,16 @@ pub(crate) fn read_pyulog<'py>(
     let read = if let Ok(path) = source.cast::<PyString>() {
         let path = path.to_string();
         py.detach(|| {
-            trim_heap();
-            let file = ulog_runtime::read::MappedFile::open(&path)
-                .map_err(|e| Err(format!("{path}: {e}")))?;
-            let f = pyulog::read_mapped(&file, &options).map_err(Ok)?;
-            let f = recovered(&file, f);
-            trim_heap();
-            Ok(f)
+            trimmed(|| {
+                let file = ulog_runtime::read::MappedFile::open(&path)
+                    .map_err(|e| Err(format!("{path}: {e}")))?;
+                let f = pyulog::read_mapped(&file, &options).map_err(Ok)?;
+                Ok(recovered(&file, f))
+            })
         })
     } else {
         let bytes = source.cast::<PyBytes>()?.as_bytes();
-        py.detach(|| {
-            trim_heap();
-            let f = recovered(bytes, pyulog::read(bytes, &options).map_err(Ok)?);
-            trim_heap();
-            Ok(f)
-        })
+        py.detach(|| trimmed(|| Ok(recovered(bytes, pyulog::read(bytes, &options).map_err(Ok)?))))
     };
     match read {
         Ok(f) => to_dict(py, f),
@@ -72,10 +66,18 @@ pub(crate) fn read_pyulog<'py>(
     }
 }
 
+/// Runs `read` between two [`trim_heap`]s: before reading and again before the Python
+/// objects are made, so that a `ULog` peaks lower (the rows come on top of less).
+fn trimmed<T>(read: impl FnOnce() -> T) -> T {
+    trim_heap();
+    let out = read();
+    trim_heap();
+    out
+}
+
 /// Gives the heap's free pages back to the system (the whole process's: what the
-/// interpreter freed, after its imports, say, as well as what reading left). Done before
-/// reading and again before the Python objects are made, a `ULog` peaks lower: the rows
-/// come on top of less. (Called without the GIL.)
+/// interpreter freed, after its imports, say, as well as what reading left). Called without
+/// the GIL.
 fn trim_heap() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     #[allow(unsafe_code)]

@@ -341,6 +341,14 @@ fn analysis(faults: Faults) -> Analysis {
     from_log
 }
 
+/// The flight modes: name, start and end.
+fn modes(a: &Analysis) -> Vec<(&str, u64, u64)> {
+    a.flight_modes
+        .iter()
+        .map(|m| (m.mode.as_str(), m.start_us, m.end_us))
+        .collect()
+}
+
 fn ids(a: &Analysis) -> Vec<&str> {
     a.diagnostics.iter().map(|d| d.id.as_str()).collect()
 }
@@ -349,13 +357,8 @@ fn ids(a: &Analysis) -> Vec<&str> {
 fn a_normal_flight_reports_its_facts_and_nothing_wrong() {
     let a = analysis(Faults::default());
     assert_eq!(ids(&a), Vec::<&str>::new(), "{:#?}", a.diagnostics);
-    let modes: Vec<(&str, u64, u64)> = a
-        .flight_modes
-        .iter()
-        .map(|m| (m.mode.as_str(), m.start_us, m.end_us))
-        .collect();
     assert_eq!(
-        modes,
+        modes(&a),
         [
             ("Position", 1, 30 * S + 1),
             ("Mission", 30 * S + 1, 60 * S - 5_000 + 1)
@@ -573,13 +576,8 @@ fn the_last_mode_lasts_until_the_last_status_even_when_an_older_row_ends_the_log
     };
     w.write(&attitude, &old).unwrap();
     let a = Analysis::of_log(&Log::from_vec(w.into_inner()).unwrap());
-    let modes: Vec<(&str, u64, u64)> = a
-        .flight_modes
-        .iter()
-        .map(|m| (m.mode.as_str(), m.start_us, m.end_us))
-        .collect();
     assert_eq!(
-        modes,
+        modes(&a),
         [
             ("Manual", 10_000_000, 20_000_000),
             ("Position", 20_000_000, 30_000_000)

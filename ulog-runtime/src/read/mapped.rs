@@ -91,10 +91,10 @@ impl MappedFile {
         let _ = self.map.advise(memmap2::Advice::NoHugePage);
     }
 
-    /// Drops the pages of `[from, to)` from the process (whole 64 KiB blocks only); returns where
-    /// the pages it dropped end (`to` down to a page boundary, at least `from`), which is
-    /// where the next release of the walk starts: a block `to` cuts is released next time,
-    /// not skipped.
+    /// Drops the pages of `[from, to)` from the process (whole 64 KiB blocks only). Returns
+    /// where the blocks it dropped end (`to` down to a block boundary, at least `from`):
+    /// where the walk's next release starts, so that a block `to` cuts is released next
+    /// time, not skipped.
     pub(crate) fn release(&self, from: u64, to: u64) -> u64 {
         // A multiple of every page size Linux uses (4, 16 and 64 KiB).
         const PAGE: u64 = 64 << 10;

@@ -540,27 +540,24 @@ impl<W: Write + Send> Table<W> {
         self.pending_bytes = 0;
         let schema = self.schema.clone();
         let (file, factory) = self.writer()?;
-        let mut writers = factory
-            .create_column_writers(file.flushed_row_groups().len())?
-            .into_iter();
+        let writers = factory.create_column_writers(file.flushed_row_groups().len())?;
+        // Every column is a flat primitive or text one (`columns::arrow`): one Parquet leaf,
+        // one writer, each field.
+        if writers.len() != schema.fields().len() {
+            return Err(ParquetError::General(format!(
+                "{} column writers for {} columns",
+                writers.len(),
+                schema.fields().len()
+            )));
+        }
         let mut row_group = file.next_row_group()?;
-        for (i, field) in schema.fields().iter().enumerate() {
-            // A field is one Parquet leaf column, or several for a nested type.
-            let mut field_writers = Vec::new();
+        for (i, (field, mut writer)) in schema.fields().iter().zip(writers).enumerate() {
             for batch in &pending {
-                let leaves = compute_leaves(field, batch.column(i))?;
-                while field_writers.len() < leaves.len() {
-                    field_writers.push(writers.next().ok_or_else(|| {
-                        ParquetError::General(format!("no column writer left for {}", field.name()))
-                    })?);
-                }
-                for (writer, leaf) in field_writers.iter_mut().zip(&leaves) {
-                    writer.write(leaf)?;
+                for leaf in compute_leaves(field, batch.column(i))? {
+                    writer.write(&leaf)?;
                 }
             }
-            for writer in field_writers {
-                writer.close()?.append_to_row_group(&mut row_group)?;
-            }
+            writer.close()?.append_to_row_group(&mut row_group)?;
         }
         row_group.close()?;
         file.flush()?;
