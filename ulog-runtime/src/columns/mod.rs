@@ -324,6 +324,46 @@ impl ColumnValues {
         self.len() == 0
     }
 
+    /// The ULog type of the values (`char[N]` for text).
+    pub(crate) fn type_name(&self) -> &'static str {
+        match self {
+            ColumnValues::Int8(_) => "int8_t",
+            ColumnValues::UInt8(_) => "uint8_t",
+            ColumnValues::Int16(_) => "int16_t",
+            ColumnValues::UInt16(_) => "uint16_t",
+            ColumnValues::Int32(_) => "int32_t",
+            ColumnValues::UInt32(_) => "uint32_t",
+            ColumnValues::Int64(_) => "int64_t",
+            ColumnValues::UInt64(_) => "uint64_t",
+            ColumnValues::Float(_) => "float",
+            ColumnValues::Double(_) => "double",
+            ColumnValues::Bool(_) => "bool",
+            ColumnValues::Char(_) => "char",
+            ColumnValues::Text(_) => "char[N]",
+        }
+    }
+
+    /// Bytes of memory the values hold (a text's `String` and its bytes).
+    pub(crate) fn memory(&self) -> usize {
+        fn held<T>(v: &Vec<T>) -> usize {
+            v.capacity() * size_of::<T>()
+        }
+        match self {
+            ColumnValues::Int8(v) => held(v),
+            ColumnValues::UInt8(v) | ColumnValues::Char(v) => held(v),
+            ColumnValues::Int16(v) => held(v),
+            ColumnValues::UInt16(v) => held(v),
+            ColumnValues::Int32(v) => held(v),
+            ColumnValues::UInt32(v) => held(v),
+            ColumnValues::Int64(v) => held(v),
+            ColumnValues::UInt64(v) => held(v),
+            ColumnValues::Float(v) => held(v),
+            ColumnValues::Double(v) => held(v),
+            ColumnValues::Bool(v) => held(v),
+            ColumnValues::Text(v) => held(v) + v.iter().map(String::capacity).sum::<usize>(),
+        }
+    }
+
     /// Every value converted to `f64`, whatever the column's type (`bool` as 0/1, `char` as a
     /// signed byte, 64-bit integers beyond 2^53 rounded); `None` for text. The `as_*`
     /// accessors give the stored values without converting.
@@ -471,6 +511,11 @@ impl Columns {
             }
         }
         self.rows += other.rows;
+    }
+
+    /// Bytes of memory the values hold.
+    pub(crate) fn memory(&self) -> usize {
+        self.values.iter().map(ColumnValues::memory).sum()
     }
 
     /// The values, in column order.

@@ -1,11 +1,12 @@
 //! Encoding a conversion's tables beside its read: batches of rows as they came
-//! ([`RowBatch`]) are made columns, their field statistics taken, and held as Arrow batches
-//! until a row group is written, each table's batches in the order they came. Either on the
-//! reading thread ([`Encoder::inline`]) or on a pool of threads ([`Encoder::pool`]) that
-//! takes one table at a time each, so that one log uses every core. Either way, when the
-//! batches held by all tables pass the budget, the table holding most bytes per column is
-//! written as a row group (of those no other thread is encoding): each row group costs a
-//! ZSTD context per column, so a table of many columns waits until its row group is large.
+//! ([`RowBatch`]) are made columns, their field statistics taken, and held until a row
+//! group is written, each table's batches in the order they came. Either on the reading
+//! thread ([`Encoder::inline`]) or on a pool of threads ([`Encoder::pool`]) that takes one
+//! table at a time each, so that one log uses every core. Either way, when the batches held
+//! by all tables pass the budget, the table holding most bytes per column is written as a
+//! row group (of those no other thread is encoding): each column chunk has a cost of its own
+//! (a column writer, its pages' headers, its metadata in the footer), so a table of many
+//! columns waits until its row group is large.
 
 use std::collections::VecDeque;
 use std::io::Write;
@@ -269,10 +270,8 @@ impl<W: Output> Encoder<W> {
     }
 
     /// While the tables hold more than the budget, writes the table holding most bytes per
-    /// column, of those no other worker holds, as a row group. (parquet-rs makes a
-    /// compression and a decompression context per column chunk, and each runs `CPUID`
-    /// three times, which on a virtual machine traps to the hypervisor: 7.8 µs a `CPUID` on
-    /// a 2-core KVM Xeon, where making the contexts took 9.6% of a conversion's CPU.)
+    /// column, of those no other worker holds, as a row group (the fewer column chunks, the
+    /// less their fixed costs).
     fn within_budget<'a>(
         &'a self,
         mut st: MutexGuard<'a, State<W>>,

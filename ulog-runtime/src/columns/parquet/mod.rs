@@ -24,6 +24,7 @@
 //! The Arrow schema stored with the file also carries each column's ULog type
 //! (`ulog.type`).
 
+mod chunk;
 mod convert;
 mod encode;
 mod fleet;
@@ -33,18 +34,17 @@ mod tests;
 use std::io::Write;
 
 use parquet::arrow::ArrowWriter;
-use parquet::arrow::arrow_writer::{ArrowRowGroupWriterFactory, compute_leaves};
 use parquet::basic::{Compression, ZstdLevel};
 use parquet::errors::ParquetError;
 use parquet::file::metadata::KeyValue;
-use parquet::file::properties::{EnabledStatistics, WriterProperties};
+use parquet::file::properties::{EnabledStatistics, WriterProperties, WriterPropertiesPtr};
 use parquet::file::writer::SerializedFileWriter;
 
 pub use convert::{Conversion, ConvertError, Converter, WrittenFile};
 
 pub use fleet::Layout;
 
-use super::{ColumnBuilder, ColumnSpec, Columns, Window, arrow::record_batch};
+use super::{ColumnBuilder, ColumnSpec, Columns, Window};
 use crate::read::{Log, Metadata, Row, Subscription};
 
 use crate::schema::{FieldKind, Primitive, Schema};
@@ -59,14 +59,13 @@ pub struct ParquetOptions {
     /// Memory for the rows waiting for their row group, all tables of one log together:
     /// when they pass it, the table holding most bytes per column is encoded and written as
     /// a row group. A conversion's memory is this, plus while a row group is encoded one
-    /// column chunk's encoded pages and ZSTD workspace at a time (row groups are encoded a
-    /// column at a time) and a decompression context per column of that table (parquet-rs
-    /// makes one per column chunk, about 50 KB), plus per table the batch being filled
+    /// column chunk's encoded pages at a time (row groups are encoded a column at a time)
+    /// and a ZSTD context per encoding thread, plus per table the batch being filled
     /// ([`ParquetOptions::batch_bytes`]) and the footer metadata of its row groups so far,
     /// plus what the log says besides its rows (formats, parameters, logged messages,
     /// parameter changes, dropouts: kept for `metadata.json`), plus the flight analysis's
     /// state when it is on. On the 400 MB benchmark log (70 tables) the whole process
-    /// peaks at about 52 MiB with the default 16 MiB.
+    /// peaks at about 47 MiB with the default 16 MiB.
     pub buffer_bytes: usize,
     /// Row data collected per topic instance before it is made an Arrow record batch (at
     /// least one row).
@@ -113,8 +112,22 @@ impl Default for ParquetOptions {
 impl ParquetOptions {
     /// The writer properties, with `metadata` as the file's key-value metadata.
     pub fn properties(&self, metadata: Vec<KeyValue>) -> Result<WriterProperties, ParquetError> {
-        Ok(WriterProperties::builder()
+        Ok(self
+            .builder(metadata)
             .set_compression(Compression::ZSTD(ZstdLevel::try_new(self.zstd_level)?))
+            .build())
+    }
+
+    /// The properties without compression, for column writers whose pages are compressed
+    /// by [`chunk`].
+    fn chunk_properties(&self) -> WriterProperties {
+        self.builder(Vec::new())
+            .set_compression(Compression::UNCOMPRESSED)
+            .build()
+    }
+
+    fn builder(&self, metadata: Vec<KeyValue>) -> parquet::file::properties::WriterPropertiesBuilder {
+        WriterProperties::builder()
             .set_dictionary_enabled(self.dictionary)
             .set_data_page_size_limit(64 << 10)
             .set_statistics_enabled(if self.page_statistics {
@@ -127,7 +140,6 @@ impl ParquetOptions {
                 env!("CARGO_PKG_VERSION")
             ))
             .set_key_value_metadata((!metadata.is_empty()).then_some(metadata))
-            .build())
     }
 
     /// Whether topic `name` is converted.
@@ -434,22 +446,22 @@ impl Admission {
 /// One table being written: batches of columns held until they make a row group, each
 /// row group encoded and written at once, the file begun only with the first row group.
 ///
-/// A row group is encoded one column at a time: a column's chunk is encoded from every
-/// batch, closed and written before the next column's is begun, so that only one column's
-/// ZSTD workspace (a few hundred kilobytes once it has compressed a page) and encoded pages
-/// are held at a time, whatever the number of columns. (The writer's `ArrowWriter::write`
-/// encodes every column of a batch at once, holding a workspace and the encoded pages of
-/// every column until the row group is closed.)
+/// A row group is encoded one column at a time ([`chunk::write_chunk`]): a column's chunk is
+/// encoded from every batch, closed and written before the next column's is begun, so that
+/// only one column's encoded pages are held at a time, whatever the number of columns.
 struct Table<W: Write + Send> {
     schema: arrow_schema::SchemaRef,
     /// The writer, once the first row group is written; until then its output and
-    /// properties.
-    writer: Option<(SerializedFileWriter<W>, ArrowRowGroupWriterFactory)>,
+    /// properties. (Made by `ArrowWriter`, which stores the Arrow schema in the file.)
+    writer: Option<SerializedFileWriter<W>>,
     out: Option<(W, WriterProperties)>,
     properties_error: Option<ParquetError>,
+    /// The column writers' properties: as the file's, without compression.
+    chunk_properties: WriterPropertiesPtr,
+    zstd_level: i32,
     row_group_rows: usize,
     /// Batches of the next row group.
-    pending: Vec<arrow_array::RecordBatch>,
+    pending: Vec<Columns>,
     pending_rows: usize,
     pending_bytes: usize,
     rows: usize,
@@ -474,6 +486,8 @@ impl<W: Write + Send> Table<W> {
             writer: None,
             out,
             properties_error,
+            chunk_properties: std::sync::Arc::new(options.chunk_properties()),
+            zstd_level: options.zstd_level,
             row_group_rows: options.row_group_rows.max(1),
             pending: Vec::new(),
             pending_rows: 0,
@@ -494,16 +508,14 @@ impl<W: Write + Send> Table<W> {
         }
         // Callers make batches of at most `row_group_rows` rows.
         debug_assert!(rows <= self.row_group_rows);
-        let batch = record_batch(&self.schema, columns)?;
-        self.pending_bytes += batch.get_array_memory_size();
+        self.pending_bytes += columns.memory();
         self.pending_rows += rows;
         self.rows += rows;
-        self.pending.push(batch);
+        self.pending.push(columns);
         Ok(())
     }
 
-    /// Its columns: each row group holds a chunk of each, encoded with a ZSTD context of
-    /// its own.
+    /// Its columns: each row group holds a chunk of each.
     fn columns(&self) -> usize {
         self.schema.fields().len()
     }
@@ -515,16 +527,14 @@ impl<W: Write + Send> Table<W> {
 
     /// The writer, made on first use (through `ArrowWriter`, which stores the Arrow
     /// schema in the file's metadata).
-    fn writer(
-        &mut self,
-    ) -> Result<&mut (SerializedFileWriter<W>, ArrowRowGroupWriterFactory), ParquetError> {
+    fn writer(&mut self) -> Result<&mut SerializedFileWriter<W>, ParquetError> {
         if self.writer.is_none() {
             if let Some(e) = self.properties_error.take() {
                 return Err(e);
             }
             let (out, props) = self.out.take().expect("an output until the writer is made");
             let writer = ArrowWriter::try_new(out, self.schema.clone(), Some(props))?;
-            self.writer = Some(writer.into_serialized_writer()?);
+            self.writer = Some(writer.into_serialized_writer()?.0);
         }
         Ok(self.writer.as_mut().expect("just made"))
     }
@@ -538,26 +548,23 @@ impl<W: Write + Send> Table<W> {
         let pending = std::mem::take(&mut self.pending);
         self.pending_rows = 0;
         self.pending_bytes = 0;
-        let schema = self.schema.clone();
-        let (file, factory) = self.writer()?;
-        let writers = factory.create_column_writers(file.flushed_row_groups().len())?;
-        // Every column is a flat primitive or text one (`columns::arrow`): one Parquet leaf,
-        // one writer, each field.
-        if writers.len() != schema.fields().len() {
+        let props = self.chunk_properties.clone();
+        let level = self.zstd_level;
+        let columns = self.columns();
+        let file = self.writer()?;
+        // Every column is a flat primitive or text one (`columns::arrow`): one Parquet leaf
+        // each.
+        let leaves = file.schema_descr().num_columns();
+        if leaves != columns {
             return Err(ParquetError::General(format!(
-                "{} column writers for {} columns",
-                writers.len(),
-                schema.fields().len()
+                "{leaves} Parquet columns for {columns} columns"
             )));
         }
+        let descrs: Vec<_> = (0..leaves).map(|i| file.schema_descr().column(i)).collect();
         let mut row_group = file.next_row_group()?;
-        for (i, (field, mut writer)) in schema.fields().iter().zip(writers).enumerate() {
-            for batch in &pending {
-                for leaf in compute_leaves(field, batch.column(i))? {
-                    writer.write(&leaf)?;
-                }
-            }
-            writer.close()?.append_to_row_group(&mut row_group)?;
+        for (i, descr) in descrs.into_iter().enumerate() {
+            let values = pending.iter().map(|batch| &batch.values()[i]);
+            chunk::write_chunk(&mut row_group, descr, &props, level, values)?;
         }
         row_group.close()?;
         file.flush()?;
@@ -572,7 +579,7 @@ impl<W: Write + Send> Table<W> {
     /// The output, once the file is begun (to close a file handle between row groups:
     /// the writer is flushed after each).
     fn output(&mut self) -> Option<&mut W> {
-        self.writer.as_mut().map(|(file, _)| file.inner_mut())
+        self.writer.as_mut().map(SerializedFileWriter::inner_mut)
     }
 
     /// Writes what is left and the footer, with the log's identity; a table without rows
@@ -592,7 +599,7 @@ impl<W: Write + Send> Table<W> {
                 },
             ));
         }
-        let (file, _) = self.writer()?;
+        let file = self.writer()?;
         for kv in identity.key_values() {
             file.append_key_value_metadata(kv);
         }
