@@ -7,7 +7,7 @@
 use std::sync::Arc;
 
 use super::FieldStat;
-use crate::columns::{ColumnKind, ColumnSpec, RowBatch, Source};
+use crate::columns::{ColumnKind, ColumnSpec, Source};
 #[cfg(feature = "parquet")]
 use crate::columns::{ColumnValues, Columns};
 use crate::read::Subscription;
@@ -16,22 +16,150 @@ use crate::schema::{Primitive, Schema};
 /// Bytes of rows staged before they are reduced.
 const STAGE_BYTES: usize = 32 << 10;
 
-/// Running statistics of one field.
+/// Running statistics of one field, kept in the field's own kind of number: integers'
+/// bounds as integers and their sum exact (every integer is finite), floats' bounds and sum
+/// over their finite values.
 #[derive(Debug, Clone, Copy)]
-struct Stat {
-    min: f64,
-    max: f64,
-    sum: f64,
-    count: u64,
+enum Stat {
+    Signed {
+        min: i64,
+        max: i64,
+        sum: i128,
+        count: u64,
+    },
+    Unsigned {
+        min: u64,
+        max: u64,
+        sum: u128,
+        count: u64,
+    },
+    Float {
+        min: f64,
+        max: f64,
+        sum: f64,
+        count: u64,
+    },
 }
 
-impl Default for Stat {
-    fn default() -> Stat {
-        Stat {
-            min: f64::INFINITY,
-            max: f64::NEG_INFINITY,
-            sum: 0.0,
-            count: 0,
+impl Stat {
+    fn new(p: Primitive) -> Stat {
+        match p {
+            Primitive::Float | Primitive::Double => Stat::Float {
+                min: f64::INFINITY,
+                max: f64::NEG_INFINITY,
+                sum: 0.0,
+                count: 0,
+            },
+            p if p.is_unsigned_integer() => Stat::Unsigned {
+                min: u64::MAX,
+                max: 0,
+                sum: 0,
+                count: 0,
+            },
+            _ => Stat::Signed {
+                min: i64::MAX,
+                max: i64::MIN,
+                sum: 0,
+                count: 0,
+            },
+        }
+    }
+
+    /// Minimum, maximum and mean as `f64`, and the count of finite values.
+    #[allow(clippy::cast_precision_loss)]
+    fn finish(&self) -> (f64, f64, f64, u64) {
+        match *self {
+            Stat::Signed {
+                min,
+                max,
+                sum,
+                count,
+            } => (min as f64, max as f64, sum as f64 / count as f64, count),
+            Stat::Unsigned {
+                min,
+                max,
+                sum,
+                count,
+            } => (min as f64, max as f64, sum as f64 / count as f64, count),
+            Stat::Float {
+                min,
+                max,
+                sum,
+                count,
+            } => (min, max, sum / count as f64, count),
+        }
+    }
+
+    /// Both statistics as one.
+    fn merge(&mut self, other: Stat) {
+        match (self, other) {
+            (
+                Stat::Signed {
+                    min,
+                    max,
+                    sum,
+                    count,
+                },
+                Stat::Signed {
+                    min: m,
+                    max: x,
+                    sum: s,
+                    count: c,
+                },
+            ) => {
+                *min = (*min).min(m);
+                *max = (*max).max(x);
+                *sum += s;
+                *count += c;
+            }
+            (
+                Stat::Unsigned {
+                    min,
+                    max,
+                    sum,
+                    count,
+                },
+                Stat::Unsigned {
+                    min: m,
+                    max: x,
+                    sum: s,
+                    count: c,
+                },
+            ) => {
+                *min = (*min).min(m);
+                *max = (*max).max(x);
+                *sum += s;
+                *count += c;
+            }
+            (
+                Stat::Float {
+                    min,
+                    max,
+                    sum,
+                    count,
+                },
+                Stat::Float {
+                    min: m,
+                    max: x,
+                    sum: s,
+                    count: c,
+                },
+            ) => {
+                *min = min.min(m);
+                *max = max.max(x);
+                *sum += s;
+                *count += c;
+            }
+            // Statistics of one field are of one kind.
+            _ => {}
+        }
+    }
+
+    fn count(&self) -> u64 {
+        match *self {
+            Stat::Signed { count, .. }
+            | Stat::Unsigned { count, .. }
+            | Stat::Float { count, .. } => count,
         }
     }
 }
@@ -42,8 +170,11 @@ struct Acc {
     topic: String,
     multi_id: u8,
     format: String,
-    stage: RowBatch,
-    stage_rows: usize,
+    /// Rows staged: each row's first `row_len` bytes, back to back.
+    stage: Vec<u8>,
+    row_len: usize,
+    /// Bytes staged before they are reduced (whole rows).
+    stage_len: usize,
     /// Per counted field: its name, offset, type and column index.
     leaves: Vec<(String, usize, Primitive, usize)>,
     stats: Vec<Stat>,
@@ -68,9 +199,10 @@ impl Acc {
             topic: topic.to_owned(),
             multi_id,
             format: spec.format().to_owned(),
-            stage: RowBatch::with_capacity(spec, stage_rows),
-            stage_rows,
-            stats: vec![Stat::default(); leaves.len()],
+            stage: Vec::with_capacity(stage_rows * spec.row_len()),
+            row_len: spec.row_len(),
+            stage_len: stage_rows * spec.row_len(),
+            stats: leaves.iter().map(|(_, _, p, _)| Stat::new(*p)).collect(),
             leaves,
         }
     }
@@ -135,8 +267,33 @@ impl FieldStats {
     #[inline]
     pub(super) fn row(&mut self, k: usize, data: &[u8]) {
         let acc = &mut self.accs[k];
-        if acc.stage.push(data, 0) && acc.stage.rows() >= acc.stage_rows {
-            acc.reduce();
+        // Rows shorter than the fields need are left out (as columns leave them out).
+        if let Some(row) = data.get(..acc.row_len) {
+            acc.stage.extend_from_slice(row);
+            if acc.stage.len() >= acc.stage_len {
+                acc.reduce();
+            }
+        }
+    }
+
+    /// Takes in the statistics of another part of the rows.
+    pub(super) fn merge(&mut self, mut other: FieldStats) {
+        for mut theirs in other.accs.drain(..) {
+            theirs.reduce();
+            let mine = self.accs.iter_mut().find(|a| {
+                a.topic == theirs.topic
+                    && a.multi_id == theirs.multi_id
+                    && a.format == theirs.format
+            });
+            match mine {
+                Some(mine) => {
+                    mine.reduce();
+                    for (s, t) in mine.stats.iter_mut().zip(theirs.stats) {
+                        s.merge(t);
+                    }
+                }
+                None => self.accs.push(theirs),
+            }
         }
     }
 
@@ -151,17 +308,18 @@ impl FieldStats {
         accs.sort_by(|a, b| (&a.topic, a.multi_id).cmp(&(&b.topic, b.multi_id)));
         for a in accs {
             for ((name, ..), s) in a.leaves.iter().zip(&a.stats) {
-                if s.count == 0 {
+                if s.count() == 0 {
                     continue;
                 }
+                let (min, max, mean, count) = s.finish();
                 // Several formats of one instance (a resubscription): merged by name.
                 if let Some(f) = out.iter_mut().find(|f: &&mut FieldStat| {
                     f.topic == a.topic && f.multi_id == a.multi_id && f.field == *name
                 }) {
-                    let total = f.count + s.count;
-                    f.mean = (f.mean * f.count as f64 + s.sum) / total as f64;
-                    f.min = f.min.min(s.min);
-                    f.max = f.max.max(s.max);
+                    let total = f.count + count;
+                    f.mean = (f.mean * f.count as f64 + mean * count as f64) / total as f64;
+                    f.min = f.min.min(min);
+                    f.max = f.max.max(max);
                     f.count = total;
                     continue;
                 }
@@ -169,10 +327,10 @@ impl FieldStats {
                     topic: a.topic.clone(),
                     multi_id: a.multi_id,
                     field: name.clone(),
-                    min: s.min,
-                    max: s.max,
-                    mean: s.sum / s.count as f64,
-                    count: s.count,
+                    min,
+                    max,
+                    mean,
+                    count,
                 });
             }
         }
@@ -183,8 +341,8 @@ impl FieldStats {
 impl Acc {
     /// Folds the staged rows into the statistics.
     fn reduce(&mut self) {
-        let stride = self.stage.spec().row_len();
-        let bytes = self.stage.bytes();
+        let stride = self.row_len;
+        let bytes = &self.stage;
         if stride > 0 && !bytes.is_empty() {
             for ((_, at, p, _), stat) in self.leaves.iter().zip(&mut self.stats) {
                 reduce(bytes, stride, *at, *p, stat);
@@ -194,119 +352,239 @@ impl Acc {
     }
 }
 
-/// Folds field `p` at `at` of every row of `bytes` (`stride` bytes a row) into `stat`:
-/// four rows at a time into four sets of accumulators (a sum's additions do not wait for
-/// each other), a value that is not finite selected away rather than branched around.
-#[allow(clippy::cast_precision_loss)]
+/// Folds field `p` at `at` of every row of `bytes` (`stride` bytes a row) into `stat`.
 fn reduce(bytes: &[u8], stride: usize, at: usize, p: Primitive, stat: &mut Stat) {
-    macro_rules! fold {
-        ($ty:ty) => {{
+    macro_rules! rows {
+        ($ty:ty, $fold:ident) => {{
             const SIZE: usize = size_of::<$ty>();
-            let value = |r: &[u8]| -> f64 {
-                let (v, _) = r[at..].split_first_chunk::<SIZE>().expect("in the row");
-                <$ty>::from_le_bytes(*v) as f64
+            assert!(at + SIZE <= stride, "the field is in the row");
+            let value = |r: &[u8]| {
+                let v: [u8; SIZE] = r[at..at + SIZE].try_into().expect("SIZE bytes");
+                <$ty>::from_le_bytes(v)
             };
-            let mut lanes = [Lane::new(stat.min, stat.max); 4];
-            let mut quads = bytes.chunks_exact(stride * 4);
-            for q in &mut quads {
-                for (lane, r) in lanes.iter_mut().zip(q.chunks_exact(stride)) {
-                    lane.take(value(r));
-                }
-            }
-            for r in quads.remainder().chunks_exact(stride) {
-                lanes[0].take(value(r));
-            }
-            for l in lanes {
-                stat.min = stat.min.min(l.min);
-                stat.max = stat.max.max(l.max);
-                stat.sum += l.sum;
-                stat.count += l.count;
-            }
+            let quads = bytes.chunks_exact(stride * LANES);
+            let rest = quads.remainder().chunks_exact(stride).map(value);
+            let quads = quads.map(|q| std::array::from_fn(|l| value(&q[l * stride..])));
+            $fold(quads, rest, stat)
         }};
     }
     match p {
-        Primitive::Int8 => fold!(i8),
-        Primitive::UInt8 => fold!(u8),
-        Primitive::Int16 => fold!(i16),
-        Primitive::UInt16 => fold!(u16),
-        Primitive::Int32 => fold!(i32),
-        Primitive::UInt32 => fold!(u32),
-        Primitive::Int64 => fold!(i64),
-        Primitive::UInt64 => fold!(u64),
-        Primitive::Float => fold!(f32),
-        Primitive::Double => fold!(f64),
+        Primitive::Int8 => rows!(i8, fold_signed),
+        Primitive::UInt8 => rows!(u8, fold_unsigned),
+        Primitive::Int16 => rows!(i16, fold_signed),
+        Primitive::UInt16 => rows!(u16, fold_unsigned),
+        Primitive::Int32 => rows!(i32, fold_signed),
+        Primitive::UInt32 => rows!(u32, fold_unsigned),
+        Primitive::Int64 => rows!(i64, fold_signed),
+        Primitive::UInt64 => rows!(u64, fold_unsigned),
+        Primitive::Float => rows!(f32, fold_float),
+        Primitive::Double => rows!(f64, fold_float),
         Primitive::Bool | Primitive::Char => {}
     }
 }
 
 /// Folds the values of one column into `stat`, as [`reduce`] does rows.
 #[cfg(feature = "parquet")]
-#[allow(clippy::cast_precision_loss)]
 fn reduce_column(values: &ColumnValues, stat: &mut Stat) {
-    fn fold<T: Copy>(values: &[T], to_f64: impl Fn(T) -> f64, stat: &mut Stat) {
-        let mut lanes = [Lane::new(stat.min, stat.max); 4];
-        let mut quads = values.chunks_exact(4);
-        for q in &mut quads {
-            for (lane, &v) in lanes.iter_mut().zip(q) {
-                lane.take(to_f64(v));
-            }
-        }
-        for &v in quads.remainder() {
-            lanes[0].take(to_f64(v));
-        }
-        for l in lanes {
-            stat.min = stat.min.min(l.min);
-            stat.max = stat.max.max(l.max);
-            stat.sum += l.sum;
-            stat.count += l.count;
-        }
+    macro_rules! column {
+        ($v:expr, $fold:ident) => {{
+            let quads = $v.chunks_exact(LANES);
+            let rest = quads.remainder().iter().copied();
+            let quads = quads.map(|q| std::array::from_fn(|l| q[l]));
+            $fold(quads, rest, stat)
+        }};
     }
     match values {
-        ColumnValues::Int8(v) => fold(v, f64::from, stat),
-        ColumnValues::UInt8(v) => fold(v, f64::from, stat),
-        ColumnValues::Int16(v) => fold(v, f64::from, stat),
-        ColumnValues::UInt16(v) => fold(v, f64::from, stat),
-        ColumnValues::Int32(v) => fold(v, f64::from, stat),
-        ColumnValues::UInt32(v) => fold(v, f64::from, stat),
-        ColumnValues::Int64(v) => fold(v, |x| x as f64, stat),
-        ColumnValues::UInt64(v) => fold(v, |x| x as f64, stat),
-        ColumnValues::Float(v) => fold(v, f64::from, stat),
-        ColumnValues::Double(v) => fold(v, |x| x, stat),
+        ColumnValues::Int8(v) => column!(v, fold_signed),
+        ColumnValues::UInt8(v) => column!(v, fold_unsigned),
+        ColumnValues::Int16(v) => column!(v, fold_signed),
+        ColumnValues::UInt16(v) => column!(v, fold_unsigned),
+        ColumnValues::Int32(v) => column!(v, fold_signed),
+        ColumnValues::UInt32(v) => column!(v, fold_unsigned),
+        ColumnValues::Int64(v) => column!(v, fold_signed),
+        ColumnValues::UInt64(v) => column!(v, fold_unsigned),
+        ColumnValues::Float(v) => column!(v, fold_float),
+        ColumnValues::Double(v) => column!(v, fold_float),
         ColumnValues::Bool(_) | ColumnValues::Char(_) | ColumnValues::Text(_) => {}
     }
 }
 
-/// One set of accumulators.
-#[derive(Clone, Copy)]
-struct Lane {
-    min: f64,
-    max: f64,
-    sum: f64,
-    count: u64,
+/// Lanes of accumulators, each taking every fourth value: a sum's additions do not wait for
+/// each other.
+const LANES: usize = 4;
+
+/// Folds signed integers (in groups of [`LANES`], then the rest) into `stat` (a `Signed`
+/// one): bounds as `i64`, the sum exact.
+#[inline(always)]
+fn fold_signed<T: Copy + Into<i64>>(
+    quads: impl Iterator<Item = [T; LANES]>,
+    rest: impl Iterator<Item = T>,
+    stat: &mut Stat,
+) {
+    let Stat::Signed {
+        min,
+        max,
+        sum,
+        count,
+    } = stat
+    else {
+        return;
+    };
+    let (mut lo, mut hi, mut total) = ([*min; LANES], [*max; LANES], [0i128; LANES]);
+    let mut n = 0u64;
+    let mut take = |l: usize, v: T| {
+        let v: i64 = v.into();
+        lo[l] = lo[l].min(v);
+        hi[l] = hi[l].max(v);
+        total[l] += i128::from(v);
+    };
+    for q in quads {
+        for (l, v) in q.into_iter().enumerate() {
+            take(l, v);
+        }
+        n += LANES as u64;
+    }
+    for v in rest {
+        take(0, v);
+        n += 1;
+    }
+    *min = lo.into_iter().fold(*min, i64::min);
+    *max = hi.into_iter().fold(*max, i64::max);
+    *sum += total.into_iter().sum::<i128>();
+    *count += n;
 }
 
-impl Lane {
-    fn new(min: f64, max: f64) -> Lane {
-        Lane {
-            min,
-            max,
-            sum: 0.0,
-            count: 0,
+/// Folds unsigned integers into `stat` (an `Unsigned` one), as [`fold_signed`] does signed
+/// ones.
+#[inline(always)]
+fn fold_unsigned<T: Copy + Into<u64>>(
+    quads: impl Iterator<Item = [T; LANES]>,
+    rest: impl Iterator<Item = T>,
+    stat: &mut Stat,
+) {
+    let Stat::Unsigned {
+        min,
+        max,
+        sum,
+        count,
+    } = stat
+    else {
+        return;
+    };
+    let (mut lo, mut hi, mut total) = ([*min; LANES], [*max; LANES], [0u128; LANES]);
+    let mut n = 0u64;
+    let mut take = |l: usize, v: T| {
+        let v: u64 = v.into();
+        lo[l] = lo[l].min(v);
+        hi[l] = hi[l].max(v);
+        total[l] += u128::from(v);
+    };
+    for q in quads {
+        for (l, v) in q.into_iter().enumerate() {
+            take(l, v);
         }
+        n += LANES as u64;
     }
+    for v in rest {
+        take(0, v);
+        n += 1;
+    }
+    *min = lo.into_iter().fold(*min, u64::min);
+    *max = hi.into_iter().fold(*max, u64::max);
+    *sum += total.into_iter().sum::<u128>();
+    *count += n;
+}
 
+/// A float field's values.
+trait Float: Copy + Into<f64> {
+    /// Smallest and largest of `a` and `b` (as `minss`/`maxss`: `b` if either is NaN).
+    fn lesser(a: Self, b: Self) -> Self;
+    fn greater(a: Self, b: Self) -> Self;
+    const INFINITY: Self;
+    const NEG_INFINITY: Self;
+}
+
+impl Float for f32 {
     #[inline(always)]
-    fn take(&mut self, v: f64) {
-        let finite = v.is_finite();
-        // NaN compares false both ways: it moves neither bound.
-        let bound = if finite { v } else { f64::NAN };
-        if bound < self.min {
-            self.min = bound;
+    fn lesser(a: f32, b: f32) -> f32 {
+        if a < b { a } else { b }
+    }
+    #[inline(always)]
+    fn greater(a: f32, b: f32) -> f32 {
+        if a > b { a } else { b }
+    }
+    const INFINITY: f32 = f32::INFINITY;
+    const NEG_INFINITY: f32 = f32::NEG_INFINITY;
+}
+
+impl Float for f64 {
+    #[inline(always)]
+    fn lesser(a: f64, b: f64) -> f64 {
+        if a < b { a } else { b }
+    }
+    #[inline(always)]
+    fn greater(a: f64, b: f64) -> f64 {
+        if a > b { a } else { b }
+    }
+    const INFINITY: f64 = f64::INFINITY;
+    const NEG_INFINITY: f64 = f64::NEG_INFINITY;
+}
+
+/// Folds floats into `stat` (a `Float` one) over their finite values. Most fields have no
+/// value that is not finite: the values are first folded as if none were (bounds in the
+/// field's own type, the sum in `f64`), which a finite sum proves (a NaN or an infinity
+/// would have made the sum one); otherwise again, each value looked at.
+#[inline(always)]
+fn fold_float<T: Float>(
+    quads: impl Iterator<Item = [T; LANES]> + Clone,
+    rest: impl Iterator<Item = T> + Clone,
+    stat: &mut Stat,
+) {
+    let Stat::Float {
+        min,
+        max,
+        sum,
+        count,
+    } = stat
+    else {
+        return;
+    };
+    let (mut lo, mut hi, mut total) = (
+        [T::INFINITY; LANES],
+        [T::NEG_INFINITY; LANES],
+        [0.0f64; LANES],
+    );
+    let mut n = 0u64;
+    let mut take = |l: usize, v: T| {
+        lo[l] = T::lesser(v, lo[l]);
+        hi[l] = T::greater(v, hi[l]);
+        total[l] += v.into();
+    };
+    for q in quads.clone() {
+        for (l, v) in q.into_iter().enumerate() {
+            take(l, v);
         }
-        if bound > self.max {
-            self.max = bound;
+        n += LANES as u64;
+    }
+    for v in rest.clone() {
+        take(0, v);
+        n += 1;
+    }
+    let all: f64 = total.into_iter().sum();
+    if all.is_finite() {
+        *min = lo.into_iter().map(Into::into).fold(*min, f64::min);
+        *max = hi.into_iter().map(Into::into).fold(*max, f64::max);
+        *sum += all;
+        *count += n;
+        return;
+    }
+    for v in quads.flatten().chain(rest) {
+        let v: f64 = v.into();
+        if v.is_finite() {
+            *min = min.min(v);
+            *max = max.max(v);
+            *sum += v;
+            *count += 1;
         }
-        self.sum += if finite { v } else { 0.0 };
-        self.count += u64::from(finite);
     }
 }

@@ -42,7 +42,7 @@ mod summary;
 use std::io::Read;
 use std::num::NonZero;
 
-use crate::read::{Log, Metadata, Row, Subscription};
+use crate::read::{Log, Metadata, Row, RowVisitor, Subscription, visit_rows};
 use crate::{Event, ReadError, StreamReader};
 
 pub use diagnostics::{Diagnostic, Evidence, Severity};
@@ -612,52 +612,79 @@ impl Analysis {
         Ok(analyzer.finish(reader.metadata()))
     }
 
-    /// The analysis of a whole-file log: the same as [`Analysis::of_reader`] gives. On a
-    /// machine of more than one core, the per-field statistics are taken on another
-    /// thread, in a pass of their own.
+    /// The analysis of a whole-file log: the same as [`Analysis::of_reader`] gives, in
+    /// the passes of [`Analysis::of_bytes`] over the log's bytes.
     pub fn of_log(log: &Log<'_>) -> Analysis {
-        let meta = log.metadata();
-        let pass = |parts: Parts, rows: std::ops::Range<usize>| {
-            let mut analyzer = Analyzer::of_parts(parts);
-            log.data_range(rows)
-                .for_each(|row| analyzer.row(meta, &row));
-            analyzer
-        };
-        let n = log.row_count();
-        let mut analyzer = if std::thread::available_parallelism().map_or(1, NonZero::get) < 2 {
-            pass(Parts::default(), 0..n)
+        // The bytes were read once as a log: they walk again the same way.
+        Analysis::of_bytes(log.bytes()).unwrap_or_else(|e| Analysis {
+            missing: vec![Missing {
+                fact: "every fact".to_owned(),
+                reason: e.to_string(),
+            }],
+            ..Analysis::default()
+        })
+    }
+
+    /// The analysis of a whole file's bytes (a memory map, say): the same as
+    /// [`Analysis::of_reader`] gives, without a row index. On a machine of more than one
+    /// core, the per-field statistics are taken on another thread, in a walk of their own
+    /// beside the one of the other analyses.
+    pub fn of_bytes(bytes: &[u8]) -> Result<Analysis, ReadError> {
+        let single = std::thread::available_parallelism().map_or(1, NonZero::get) < 2;
+        let (summary, mut analyzer) = if single {
+            visit_rows(bytes, Analyzer::new(), 1)?
         } else {
             let fields = Parts {
                 core: false,
                 spectral: false,
                 fields: true,
             };
-            let (mut analyzer, fields) = std::thread::scope(|s| {
-                let fields = s.spawn(|| pass(fields, 0..n));
-                let rest = pass(
-                    Parts {
-                        fields: false,
-                        ..Parts::default()
-                    },
-                    0..n,
-                );
+            let rest = Parts {
+                fields: false,
+                ..Parts::default()
+            };
+            let (rest, fields) = std::thread::scope(|s| {
+                let fields = s.spawn(|| visit_rows(bytes, Analyzer::of_parts(fields), 1));
+                let rest = visit_rows(bytes, Analyzer::of_parts(rest), 1);
                 (
                     rest,
-                    fields
-                        .join()
-                        .expect("the field statistics pass does not panic"),
+                    fields.join().expect("the field statistics do not panic"),
                 )
             });
+            let (summary, mut analyzer) = rest?;
             analyzer.parts.fields = true;
-            analyzer.fields = fields.fields;
-            analyzer
+            analyzer.fields = fields?.1.fields;
+            (summary, analyzer)
         };
-        for d in log.diagnostics() {
+        for d in &summary.diagnostics {
             if let Some(r) = d.damaged_range() {
                 analyzer.damaged_bytes += r.end - r.start;
             }
         }
-        analyzer.finish(meta)
+        Ok(analyzer.finish(&summary.metadata))
+    }
+}
+
+/// A walk's rows to an analyzer; the parts of the per-field statistics may be walked on
+/// several threads (the other consumers need the rows in file order: one thread).
+impl RowVisitor for Analyzer {
+    #[inline]
+    fn row(&mut self, meta: &Metadata, row: &Row<'_>) {
+        Analyzer::row(self, meta, row);
+    }
+
+    fn fork(&self) -> Analyzer {
+        Analyzer::of_parts(self.parts)
+    }
+
+    fn append(&mut self, other: Analyzer) {
+        debug_assert!(
+            !self.parts.core && !self.parts.spectral,
+            "only the per-field statistics are taken in parts"
+        );
+        self.fields.merge(other.fields);
+        self.damaged_bytes += other.damaged_bytes;
+        self.last_timestamp = self.last_timestamp.max(other.last_timestamp);
     }
 }
 

@@ -21,8 +21,8 @@ pub(crate) struct Args {
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     for (i, path) in args.files.iter().enumerate() {
-        let log = crate::cli::open(path)?;
-        let analysis = Analysis::of_log(&log);
+        let file = crate::cli::open_mapped(path)?;
+        let analysis = Analysis::of_bytes(&file).map_err(|e| Failure::at(path, e))?;
         if args.json {
             serde_json::to_writer(&mut *out, &analysis)?;
             writeln!(out)?;

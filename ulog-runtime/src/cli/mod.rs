@@ -203,6 +203,16 @@ pub(crate) fn open(path: &Path) -> Result<Log<'static>, Failure> {
     })
 }
 
+/// The log file at `path`, memory-mapped (for a verb that walks it without a row index),
+/// with [`open`]'s messages.
+pub(crate) fn open_mapped(path: &Path) -> Result<crate::read::MappedFile, Failure> {
+    check_path(path, false)?;
+    crate::read::MappedFile::open(path).map_err(|e| match e {
+        crate::ReadError::Io(io) => Failure::at(path, plain_io(&io, false)),
+        other => Failure::at(path, other),
+    })
+}
+
 /// A plain message when `path` is not what a verb needs: a file (`folder` false) or a
 /// folder (`folder` true).
 pub(crate) fn check_path(path: &Path, folder: bool) -> Result<(), Failure> {

@@ -662,17 +662,6 @@ impl RowBatch {
         &self.spec
     }
 
-    /// The rows' bytes, [`ColumnSpec::row_len`] a row.
-    pub(crate) fn bytes(&self) -> &[u8] {
-        &self.bytes
-    }
-
-    /// Leaves the batch empty (its room kept).
-    pub(crate) fn clear(&mut self) {
-        self.bytes.clear();
-        self.timestamps.clear();
-    }
-
     /// The rows' columns, in the spec's order.
     pub fn columns(mut self) -> Columns {
         let rows = self.rows();

@@ -838,6 +838,80 @@ where
     Ok((summary(metadata, all), parts))
 }
 
+/// A consumer of every row of a walk, with the metadata read up to it, that can be split
+/// between threads reading parts of the file ([`visit_rows`]).
+pub(crate) trait RowVisitor: Send + Sized {
+    /// Takes one row, in file order within its part.
+    fn row(&mut self, meta: &Metadata, row: &Row<'_>);
+    /// An empty visitor for a part read by another thread.
+    fn fork(&self) -> Self;
+    /// Takes in what another thread's visitor saw, of the part that comes next.
+    fn append(&mut self, other: Self);
+}
+
+/// The sink of [`visit_rows`].
+struct Visiting<V> {
+    visitor: V,
+    rows: usize,
+}
+
+impl<V: RowVisitor> RowSink for Visiting<V> {
+    #[inline]
+    fn row(&mut self, meta: &Metadata, offset: u64, data: &[u8], sub: usize, timestamp: u64) {
+        let row = Row {
+            timestamp,
+            offset,
+            data,
+            subscription: &meta.subscriptions[sub],
+            schema: &meta.schema,
+        };
+        self.visitor.row(meta, &row);
+        self.rows += 1;
+    }
+    fn len(&self) -> usize {
+        self.rows
+    }
+    fn fork(&self, _: usize) -> Self {
+        Visiting {
+            visitor: self.visitor.fork(),
+            rows: 0,
+        }
+    }
+    fn append(&mut self, other: Self) {
+        self.rows += other.rows;
+        self.visitor.append(other.visitor);
+    }
+}
+
+/// Walks a whole file as [`fold_rows_on`] does, on at most `threads` threads, every row to
+/// `visitor` (or to its forks, for parts read by other threads, appended in file order).
+pub(crate) fn visit_rows<V: RowVisitor>(
+    bytes: &[u8],
+    visitor: V,
+    threads: usize,
+) -> Result<(Summary, V), ReadError> {
+    let (metadata, all) = collect(bytes, Visiting { visitor, rows: 0 }, threads.max(1))?;
+    let Collected {
+        sink: Visiting { visitor, rows },
+        logged,
+        changes,
+        dropouts,
+        sync_offsets,
+        diagnostics,
+        ..
+    } = all;
+    let summary = Summary {
+        metadata,
+        rows,
+        logged_messages: logged,
+        parameter_changes: changes,
+        dropouts,
+        sync_offsets,
+        diagnostics,
+    };
+    Ok((summary, visitor))
+}
+
 /// The threads a walk uses by default: every core, up to 8.
 pub(crate) fn all_cores() -> usize {
     std::thread::available_parallelism()

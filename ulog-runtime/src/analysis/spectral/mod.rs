@@ -22,21 +22,28 @@ const INTERVALS: usize = 64;
 
 impl Interval {
     /// Sees a sample's time; the median interval once known.
+    #[inline]
     pub(crate) fn see(&mut self, t: u64) -> Option<u64> {
         if self.median.is_none() {
-            if let Some(last) = self.last
-                && t > last
-            {
-                self.seen.push(t - last);
-            }
-            if self.seen.len() >= INTERVALS {
-                self.seen.sort_unstable();
-                self.median = Some(self.seen[self.seen.len() / 2].max(1));
-                self.seen = Vec::new();
-            }
+            self.learn(t);
         }
         self.last = Some(t);
         self.median
+    }
+
+    /// Takes one more interval, until there are enough for the median.
+    #[cold]
+    fn learn(&mut self, t: u64) {
+        if let Some(last) = self.last
+            && t > last
+        {
+            self.seen.push(t - last);
+        }
+        if self.seen.len() >= INTERVALS {
+            self.seen.sort_unstable();
+            self.median = Some(self.seen[self.seen.len() / 2].max(1));
+            self.seen = Vec::new();
+        }
     }
 }
 

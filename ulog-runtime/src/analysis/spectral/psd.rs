@@ -43,27 +43,43 @@ pub(crate) struct Spectrum {
 
 impl Welch {
     /// Takes one sample; `keep` false ends the current run (the vehicle not in flight).
+    #[inline]
     pub(crate) fn push(&mut self, t: u64, x: f64, keep: bool) {
-        let median = self.interval.see(t);
-        if self.state.is_none() {
-            match median {
-                None => {
-                    if keep && x.is_finite() {
-                        self.early.push((t, x));
-                    }
+        match &self.state {
+            // Enough segments: the rest of the signal changes nothing.
+            Some(s) if s.segments >= MAX_SEGMENTS => return,
+            Some(_) => {}
+            None => {
+                if !self.start(t, x, keep) {
                     return;
-                }
-                Some(dt) => {
-                    self.state = Some(State::new(dt));
-                    for (t, x) in std::mem::take(&mut self.early) {
-                        self.take(t, x, true);
-                    }
                 }
             }
         }
         self.take(t, x, keep);
     }
 
+    /// Before the rate is known: keeps the sample, until its time gives the rate, then
+    /// takes the samples kept. Returns whether the state is made.
+    #[cold]
+    fn start(&mut self, t: u64, x: f64, keep: bool) -> bool {
+        match self.interval.see(t) {
+            None => {
+                if keep && x.is_finite() {
+                    self.early.push((t, x));
+                }
+                false
+            }
+            Some(dt) => {
+                self.state = Some(State::new(dt));
+                for (t, x) in std::mem::take(&mut self.early) {
+                    self.take(t, x, true);
+                }
+                true
+            }
+        }
+    }
+
+    #[inline]
     fn take(&mut self, t: u64, x: f64, keep: bool) {
         let state = self.state.as_mut().expect("made");
         if state.segments >= MAX_SEGMENTS {

@@ -53,8 +53,12 @@ struct State {
     rlen: usize,
     shift: usize,
     since: usize,
-    u: std::collections::VecDeque<f64>,
-    y: std::collections::VecDeque<f64>,
+    /// The last `flen` samples of the setpoint and the rate: rings, `next` the oldest once
+    /// full.
+    u: Vec<f64>,
+    y: Vec<f64>,
+    next: usize,
+    filled: usize,
     window: Vec<f64>,
     fft: Fft,
     inv_snr: Vec<f64>,
@@ -154,8 +158,10 @@ impl State {
             rlen,
             shift: (flen / SUPERPOSITION).max(1),
             since: 0,
-            u: std::collections::VecDeque::with_capacity(flen + 1),
-            y: std::collections::VecDeque::with_capacity(flen + 1),
+            u: vec![0.0; flen],
+            y: vec![0.0; flen],
+            next: 0,
+            filled: 0,
             window: hann_symmetric(flen),
             fft: Fft::new(len),
             inv_snr: inverse_snr(len, dt),
@@ -167,30 +173,38 @@ impl State {
     }
 
     fn reset(&mut self, t: u64) {
-        self.u.clear();
-        self.y.clear();
+        self.next = 0;
+        self.filled = 0;
         self.since = 0;
         self.next_t = t;
     }
 
+    #[inline]
     fn push(&mut self, u: f64, y: f64) {
-        self.u.push_back(u);
-        self.y.push_back(y);
-        if self.u.len() > self.flen {
-            self.u.pop_front();
-            self.y.pop_front();
-        }
+        self.u[self.next] = u;
+        self.y[self.next] = y;
+        self.next = if self.next + 1 == self.flen {
+            0
+        } else {
+            self.next + 1
+        };
+        self.filled = (self.filled + 1).min(self.flen);
         self.since += 1;
-        if self.u.len() == self.flen && self.since >= self.shift {
+        if self.filled == self.flen && self.since >= self.shift {
             self.since = 0;
             self.window_step();
         }
     }
 
+    /// The `k`-th of the last `flen` samples of a ring, oldest first.
+    fn oldest_first<'r>(&self, ring: &'r [f64]) -> impl Iterator<Item = f64> + 'r {
+        let (newer, older) = ring.split_at(self.next);
+        older.iter().chain(newer).copied()
+    }
+
     fn window_step(&mut self) {
         let peak = self
-            .u
-            .iter()
+            .oldest_first(&self.u)
             .zip(&self.window)
             .map(|(u, w)| (u * w).abs())
             .fold(0.0, f64::max);
@@ -198,14 +212,17 @@ impl State {
             return;
         }
         let len = self.fft.len();
-        for k in 0..len {
-            let (u, y) = if k < self.flen {
-                (self.u[k] * self.window[k], self.y[k] * self.window[k])
-            } else {
-                (0.0, 0.0)
-            };
-            self.scratch_u[k] = Complex::new(u, 0.0);
-            self.scratch_y[k] = Complex::new(y, 0.0);
+        let samples = self
+            .oldest_first(&self.u)
+            .zip(self.oldest_first(&self.y))
+            .zip(&self.window);
+        for (k, ((u, y), w)) in samples.enumerate() {
+            self.scratch_u[k] = Complex::new(u * w, 0.0);
+            self.scratch_y[k] = Complex::new(y * w, 0.0);
+        }
+        for k in self.flen..len {
+            self.scratch_u[k] = Complex::default();
+            self.scratch_y[k] = Complex::default();
         }
         self.fft.forward(&mut self.scratch_u);
         self.fft.forward(&mut self.scratch_y);

@@ -126,7 +126,10 @@ impl ParquetOptions {
             .build()
     }
 
-    fn builder(&self, metadata: Vec<KeyValue>) -> parquet::file::properties::WriterPropertiesBuilder {
+    fn builder(
+        &self,
+        metadata: Vec<KeyValue>,
+    ) -> parquet::file::properties::WriterPropertiesBuilder {
         WriterProperties::builder()
             .set_dictionary_enabled(self.dictionary)
             .set_data_page_size_limit(64 << 10)
