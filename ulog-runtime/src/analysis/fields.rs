@@ -10,7 +10,7 @@ use super::FieldStat;
 use crate::columns::{ColumnKind, ColumnSpec, Source};
 #[cfg(feature = "parquet")]
 use crate::columns::{ColumnValues, Columns};
-use crate::read::Subscription;
+use crate::read::{Metadata, Row, RowVisitor, Subscription};
 use crate::schema::{Primitive, Schema};
 
 /// Bytes of rows staged before they are reduced.
@@ -235,6 +235,35 @@ impl ColumnStats {
 #[derive(Debug, Clone, Default)]
 pub(super) struct FieldStats {
     accs: Vec<Acc>,
+    /// Per subscription, when they are taken from a walk ([`RowVisitor`]): 0 until its first
+    /// row, then its accumulator + 1, or [`NONE`].
+    by_sub: Vec<u32>,
+}
+
+/// `by_sub`: a subscription whose rows count in no accumulator.
+const NONE: u32 = u32::MAX;
+
+/// The statistics as a walk's only consumer: each row straight to its accumulator.
+impl RowVisitor for FieldStats {
+    #[inline]
+    fn row(&mut self, _: &Metadata, row: &Row<'_>) {
+        let i = row.subscription.index();
+        let k = match self.by_sub.get(i) {
+            Some(&k) if k != 0 => k,
+            _ => self.first_row(row),
+        };
+        if k != NONE {
+            self.row(k as usize - 1, row.data);
+        }
+    }
+
+    fn fork(&self) -> FieldStats {
+        FieldStats::default()
+    }
+
+    fn append(&mut self, other: FieldStats) {
+        self.merge(other);
+    }
 }
 
 impl FieldStats {
@@ -256,11 +285,26 @@ impl FieldStats {
         Some(self.accs.len() - 1)
     }
 
+    /// Binds a subscription at its first row of a walk.
+    #[cold]
+    fn first_row(&mut self, row: &Row<'_>) -> u32 {
+        let i = row.subscription.index();
+        if self.by_sub.len() <= i {
+            self.by_sub.resize(i + 1, 0);
+        }
+        let k = self
+            .bind(row.subscription, row.schema())
+            .map_or(NONE, |k| k as u32 + 1);
+        self.by_sub[i] = k;
+        k
+    }
+
     /// The statistics of columns taken apart ([`ColumnStats`]).
     #[cfg(feature = "parquet")]
     pub(crate) fn from_columns(stats: Vec<ColumnStats>) -> FieldStats {
         FieldStats {
             accs: stats.into_iter().map(|c| c.0).collect(),
+            by_sub: Vec::new(),
         }
     }
 

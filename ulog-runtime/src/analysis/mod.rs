@@ -634,17 +634,12 @@ impl Analysis {
         let (summary, mut analyzer) = if single {
             visit_rows(bytes, Analyzer::new(), 1)?
         } else {
-            let fields = Parts {
-                core: false,
-                spectral: false,
-                fields: true,
-            };
             let rest = Parts {
                 fields: false,
                 ..Parts::default()
             };
             let (rest, fields) = std::thread::scope(|s| {
-                let fields = s.spawn(|| visit_rows(bytes, Analyzer::of_parts(fields), 1));
+                let fields = s.spawn(|| visit_rows(bytes, fields::FieldStats::default(), 1));
                 let rest = visit_rows(bytes, Analyzer::of_parts(rest), 1);
                 (
                     rest,
@@ -653,7 +648,7 @@ impl Analysis {
             });
             let (summary, mut analyzer) = rest?;
             analyzer.parts.fields = true;
-            analyzer.fields = fields?.1.fields;
+            analyzer.fields = fields?.1;
             (summary, analyzer)
         };
         for d in &summary.diagnostics {

@@ -1,6 +1,6 @@
 //! Welch's power spectral density of one signal, as it streams.
 
-use super::fft::{Complex, Fft};
+use super::fft::{Complex, RealFft};
 use super::{Interval, hann_periodic};
 
 /// Most segments averaged: enough for a smooth estimate, and a bound on the work.
@@ -23,13 +23,17 @@ pub(crate) struct Welch {
 #[derive(Debug, Clone)]
 struct State {
     dt_us: u64,
-    fft: Fft,
+    fft: RealFft,
     window: Vec<f64>,
+    /// `1 / (fs Σ w²)`: the density's scale.
+    scale: f64,
     /// The current run's samples not yet past a segment start.
     run: Vec<f64>,
     sum: Vec<f64>,
     segments: usize,
-    scratch: Vec<Complex>,
+    /// A segment, detrended and windowed, and its transform.
+    tapered: Vec<f64>,
+    spectrum: Vec<Complex>,
 }
 
 /// A power spectral density: frequencies and densities (units² per Hz).
@@ -123,14 +127,17 @@ impl State {
         let n = 2f64
             .powf((fs / 2.0).max(1.0).log2().round())
             .clamp(256.0, 8192.0) as usize;
+        let window = hann_periodic(n);
         State {
             dt_us,
-            fft: Fft::new(n),
-            window: hann_periodic(n),
+            fft: RealFft::new(n),
+            scale: 1.0 / (fs * window.iter().map(|w| w * w).sum::<f64>()),
+            window,
             run: Vec::with_capacity(2 * n),
             sum: vec![0.0; n / 2 + 1],
             segments: 0,
-            scratch: vec![Complex::default(); n],
+            tapered: vec![0.0; n],
+            spectrum: vec![Complex::default(); n / 2 + 1],
         }
     }
 
@@ -150,15 +157,13 @@ impl State {
         let n = self.fft.len();
         let seg = &self.run[..n];
         let mean = seg.iter().sum::<f64>() / n as f64;
-        for (k, c) in self.scratch.iter_mut().enumerate() {
-            *c = Complex::new((seg[k] - mean) * self.window[k], 0.0);
+        for ((t, x), w) in self.tapered.iter_mut().zip(seg).zip(&self.window) {
+            *t = (x - mean) * w;
         }
-        self.fft.forward(&mut self.scratch);
-        let fs = 1e6 / self.dt_us as f64;
-        let scale = 1.0 / (fs * self.window.iter().map(|w| w * w).sum::<f64>());
-        for (k, p) in self.sum.iter_mut().enumerate() {
+        self.fft.forward(&self.tapered, &mut self.spectrum);
+        for (k, (p, c)) in self.sum.iter_mut().zip(&self.spectrum).enumerate() {
             let one_sided = if k == 0 || k == n / 2 { 1.0 } else { 2.0 };
-            *p += self.scratch[k].norm_sqr() * scale * one_sided;
+            *p += c.norm_sqr() * self.scale * one_sided;
         }
         self.segments += 1;
     }

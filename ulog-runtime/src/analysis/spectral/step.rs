@@ -2,7 +2,7 @@
 //! Wiener deconvolution, as Flight Review's PID analysis (after Plasmatree's PID-Analyzer)
 //! computes it, as the samples stream.
 
-use super::fft::{Complex, Fft};
+use super::fft::{Complex, Fft, RealFft};
 use super::{Interval, hann_symmetric};
 
 /// The analysis rate: the gyro's, at most this (a 0.5 s response needs no more).
@@ -59,13 +59,23 @@ struct State {
     y: Vec<f64>,
     next: usize,
     filled: usize,
+    /// The setpoint's largest magnitudes in the ring: (sample number, |u|), each larger
+    /// than every later one (a window whose largest is within 20 deg/s is skipped before
+    /// its taper is computed: the taper only shrinks values).
+    largest: std::collections::VecDeque<(usize, f64)>,
+    /// Samples since the run began.
+    count: usize,
     window: Vec<f64>,
+    /// Both signals of a window in one transform (the setpoint real, the rate imaginary).
     fft: Fft,
+    /// The impulse response back from its half spectrum.
+    real: RealFft,
     inv_snr: Vec<f64>,
     low: Histogram,
     high: Histogram,
-    scratch_u: Vec<Complex>,
-    scratch_y: Vec<Complex>,
+    both: Vec<Complex>,
+    half: Vec<Complex>,
+    impulse: Vec<f64>,
 }
 
 #[derive(Debug, Clone)]
@@ -162,13 +172,17 @@ impl State {
             y: vec![0.0; flen],
             next: 0,
             filled: 0,
+            largest: std::collections::VecDeque::new(),
+            count: 0,
             window: hann_symmetric(flen),
             fft: Fft::new(len),
+            real: RealFft::new(len),
             inv_snr: inverse_snr(len, dt),
             low: Histogram::new(rlen),
             high: Histogram::new(rlen),
-            scratch_u: vec![Complex::default(); len],
-            scratch_y: vec![Complex::default(); len],
+            both: vec![Complex::default(); len],
+            half: vec![Complex::default(); len / 2 + 1],
+            impulse: vec![0.0; len],
         }
     }
 
@@ -177,6 +191,8 @@ impl State {
         self.filled = 0;
         self.since = 0;
         self.next_t = t;
+        self.largest.clear();
+        self.count = 0;
     }
 
     #[inline]
@@ -189,6 +205,19 @@ impl State {
             self.next + 1
         };
         self.filled = (self.filled + 1).min(self.flen);
+        let size = u.abs();
+        while self.largest.back().is_some_and(|&(_, v)| v <= size) {
+            self.largest.pop_back();
+        }
+        self.largest.push_back((self.count, size));
+        self.count += 1;
+        while self
+            .largest
+            .front()
+            .is_some_and(|&(i, _)| i + self.flen < self.count)
+        {
+            self.largest.pop_front();
+        }
         self.since += 1;
         if self.filled == self.flen && self.since >= self.shift {
             self.since = 0;
@@ -203,6 +232,9 @@ impl State {
     }
 
     fn window_step(&mut self) {
+        if self.largest.front().is_none_or(|&(_, v)| v <= LOW) {
+            return;
+        }
         let peak = self
             .oldest_first(&self.u)
             .zip(&self.window)
@@ -217,30 +249,33 @@ impl State {
             .zip(self.oldest_first(&self.y))
             .zip(&self.window);
         for (k, ((u, y), w)) in samples.enumerate() {
-            self.scratch_u[k] = Complex::new(u * w, 0.0);
-            self.scratch_y[k] = Complex::new(y * w, 0.0);
+            self.both[k] = Complex::new(u * w, y * w);
         }
-        for k in self.flen..len {
-            self.scratch_u[k] = Complex::default();
-            self.scratch_y[k] = Complex::default();
+        for z in &mut self.both[self.flen..len] {
+            *z = Complex::default();
         }
-        self.fft.forward(&mut self.scratch_u);
-        self.fft.forward(&mut self.scratch_y);
-        for k in 0..len {
-            let (u, y) = (self.scratch_u[k], self.scratch_y[k]);
-            self.scratch_y[k] = y
+        self.fft.forward(&mut self.both);
+        // U[k] = (Z[k] + conj Z[-k]) / 2, Y[k] = (Z[k] - conj Z[-k]) / 2i; the impulse
+        // response's spectrum H = Y conj(U) / (|U|² + 1/SNR) is Hermitian (real signals,
+        // a symmetric mask): its first half gives it.
+        for k in 0..=len / 2 {
+            let a = self.both[k];
+            let b = self.both[(len - k) % len].conj();
+            let u = Complex::new((a.re + b.re) * 0.5, (a.im + b.im) * 0.5);
+            let y = Complex::new((a.im - b.im) * 0.5, -(a.re - b.re) * 0.5);
+            self.half[k] = y
                 .mul(u.conj())
                 .scale(1.0 / (u.norm_sqr() + self.inv_snr[k]));
         }
-        self.fft.inverse(&mut self.scratch_y);
+        self.real.inverse(&mut self.half, &mut self.impulse);
         let mut step = 0.0;
         let hist = if peak <= HIGH {
             &mut self.low
         } else {
             &mut self.high
         };
-        for n in 0..self.rlen {
-            step += self.scratch_y[n].re;
+        for (n, h) in self.impulse[..self.rlen].iter().enumerate() {
+            step += h;
             hist.add(n, step);
         }
         hist.windows += 1;
@@ -349,37 +384,42 @@ fn gaussian_kernel(sigma: f64) -> Vec<f64> {
     k.iter().map(|v| v / sum).collect()
 }
 
-fn convolve(x: &[f64], kernel: &[f64], at: impl Fn(i64) -> f64) -> Vec<f64> {
-    let r = (kernel.len() / 2) as i64;
-    (0..x.len() as i64)
-        .map(|i| {
-            kernel
-                .iter()
-                .enumerate()
-                .map(|(k, w)| w * at(i + k as i64 - r))
-                .sum()
-        })
-        .collect()
-}
-
 /// Convolution with the edges mirrored (`d c b a | a b c d | d c b a`).
 fn convolve_reflect(x: &[f64], kernel: &[f64]) -> Vec<f64> {
     let n = x.len() as i64;
-    convolve(x, kernel, |i| {
-        let period = 2 * n;
-        let m = i.rem_euclid(period);
-        x[(if m < n { m } else { period - 1 - m }) as usize]
-    })
+    let r = (kernel.len() / 2) as i64;
+    // The signal with `r` mirrored values each side (mirrored again as often as the kernel
+    // is wider than the signal).
+    let padded: Vec<f64> = (-r..n + r)
+        .map(|i| {
+            let period = 2 * n;
+            let m = i.rem_euclid(period);
+            x[(if m < n { m } else { period - 1 - m }) as usize]
+        })
+        .collect();
+    padded
+        .windows(kernel.len())
+        .map(|w| w.iter().zip(kernel).map(|(v, k)| v * k).sum())
+        .collect()
 }
 
-/// Convolution with zeros beyond the edges.
+/// Convolution with zeros beyond the edges, of a signal that is mostly zeros (a
+/// histogram's column): each value spread over its neighbours.
 fn convolve_constant(x: &[f64], kernel: &[f64]) -> Vec<f64> {
-    convolve(x, kernel, |i| {
-        usize::try_from(i)
-            .ok()
-            .and_then(|i| x.get(i).copied())
-            .unwrap_or(0.0)
-    })
+    let r = kernel.len() / 2;
+    let mut out = vec![0.0; x.len()];
+    for (j, &v) in x.iter().enumerate() {
+        if v == 0.0 {
+            continue;
+        }
+        // out[i] = Σ_k kernel[k] x[i + k - r]: x[j] reaches i = j + r - k.
+        for (k, w) in kernel.iter().enumerate() {
+            if let Some(o) = (j + r).checked_sub(k).and_then(|i| out.get_mut(i)) {
+                *o += w * v;
+            }
+        }
+    }
+    out
 }
 
 #[cfg(test)]
