@@ -175,6 +175,77 @@ impl Framer {
         })
     }
 
+    /// The fast path over a run of messages: from the current position, every `D` message
+    /// [`Framer::peek_data`] would accept, that starts before `limit`, is given to `f` and
+    /// accepted, until one is not or `f` returns `false` (after the row it was given).
+    /// Returns the largest timestamp given (0 if none). The checks that hold for the whole
+    /// run are made once, and the position is kept in a register meanwhile.
+    #[inline]
+    pub(crate) fn data_run(
+        &mut self,
+        w: &[u8],
+        base: u64,
+        limit: u64,
+        mut f: impl FnMut(PeekedRow) -> bool,
+    ) -> u64 {
+        if self.resync.is_some() || !self.notices.is_empty() {
+            return 0;
+        }
+        let Some(mut p) = self
+            .pos
+            .checked_sub(base)
+            .and_then(|p| usize::try_from(p).ok())
+        else {
+            return 0;
+        };
+        let to_index =
+            |offset: u64| usize::try_from(offset.saturating_sub(base)).unwrap_or(usize::MAX);
+        // Messages end within the window and the data segment, and start before `limit`.
+        let end_max = w.len().min(to_index(self.segment_end));
+        let stop = to_index(limit);
+        let (mut last, mut latest) = (None, 0);
+        while p < stop {
+            let Some(h) = w.get(p..p + MESSAGE_HEADER_LEN + 2) else {
+                break;
+            };
+            if h[2] != b'D' {
+                break;
+            }
+            let size = u16::from_le_bytes([h[0], h[1]]);
+            let kind = self.d_kinds[usize::from(u16::from_le_bytes([h[3], h[4]]))];
+            let end = p + MESSAGE_HEADER_LEN + usize::from(size);
+            if !(kind.min <= size
+                && size <= kind.max
+                && kind.timestamp != NO_U64_TIMESTAMP
+                && end <= end_max)
+            {
+                break;
+            }
+            let at = p + MESSAGE_HEADER_LEN + 2 + usize::from(kind.timestamp);
+            let Some(t) = w.get(at..at + 8) else {
+                break;
+            };
+            let timestamp = u64::from_le_bytes(t.try_into().expect("8 bytes"));
+            let more = f(PeekedRow {
+                at: p,
+                size: usize::from(size),
+                sub: kind.sub as usize,
+                timestamp,
+            });
+            latest = latest.max(timestamp);
+            last = Some(p);
+            p = end;
+            if !more {
+                break;
+            }
+        }
+        if let Some(l) = last {
+            self.prev = Some(base + l as u64);
+            self.pos = base + p as u64;
+        }
+        latest
+    }
+
     /// The start of the next message.
     pub(crate) fn pos(&self) -> u64 {
         self.pos

@@ -306,15 +306,14 @@ impl<S: RowSink> Collected<S> {
             if pos >= limit {
                 return Ok(Walked::Limit);
             }
-            if let Some(row) = walker.fast_row(data, 0) {
-                self.sink.row(
-                    &walker.meta,
-                    row.offset,
-                    &data[row.data],
-                    row.sub,
-                    row.timestamp,
-                );
-                self.max_timestamp = self.max_timestamp.max(row.timestamp);
+            let (sink, mut latest) = (&mut self.sink, self.max_timestamp);
+            let taken = walker.fast_rows(data, 0, limit, |meta, row| {
+                sink.row(meta, row.offset, &data[row.data], row.sub, row.timestamp);
+                latest = latest.max(row.timestamp);
+                true
+            });
+            if taken {
+                self.max_timestamp = latest;
                 continue;
             }
             if worker {

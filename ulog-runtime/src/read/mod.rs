@@ -134,6 +134,37 @@ impl Walker {
         })
     }
 
+    /// The rows of the fast path from the current position on, while they come, before
+    /// `limit` ([`Framer::data_run`]): each given to `f` with the metadata, until `f` returns
+    /// `false`. Returns whether any row was taken.
+    #[inline]
+    fn fast_rows(
+        &mut self,
+        w: &[u8],
+        base: u64,
+        limit: u64,
+        mut f: impl FnMut(&Metadata, FastRow) -> bool,
+    ) -> bool {
+        let meta = &self.meta;
+        let mut any = false;
+        let latest = self.framer.data_run(w, base, limit, |r| {
+            any = true;
+            f(
+                meta,
+                FastRow {
+                    offset: base + r.at as u64,
+                    data: r.at + MESSAGE_HEADER_LEN + 2..r.at + MESSAGE_HEADER_LEN + r.size,
+                    sub: r.sub,
+                    timestamp: r.timestamp,
+                },
+            )
+        });
+        if any {
+            self.meta.saw_timestamp(latest);
+        }
+        any
+    }
+
     fn step<'w>(&mut self, w: &'w [u8], base: u64, eof: bool) -> Result<Step<'w>, ReadError> {
         let diag = |offset, kind| Step::Applied {
             offset,

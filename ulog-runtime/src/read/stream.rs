@@ -276,15 +276,17 @@ impl<R: Read> StreamReader<R> {
             // The rows of the current window, as long as they come.
             if self.pending.is_none() {
                 let window = &self.buf[self.start..self.end];
-                while let Some(row) = self.walker.fast_row(window, self.base) {
-                    f(Event::Row(Row {
-                        timestamp: row.timestamp,
-                        offset: row.offset,
-                        data: &window[row.data],
-                        subscription: &self.walker.meta.subscriptions[row.sub],
-                        schema: &self.walker.meta.schema,
-                    }));
-                }
+                self.walker
+                    .fast_rows(window, self.base, u64::MAX, |meta, row| {
+                        f(Event::Row(Row {
+                            timestamp: row.timestamp,
+                            offset: row.offset,
+                            data: &window[row.data],
+                            subscription: &meta.subscriptions[row.sub],
+                            schema: &meta.schema,
+                        }));
+                        true
+                    });
             }
             match self.next_event()? {
                 Some(event) => f(event),
@@ -330,20 +332,31 @@ impl<R: Read> StreamReader<R> {
         loop {
             if self.pending.is_none() {
                 let window = &self.buf[self.start..self.end];
-                while let Some(row) = self.walker.fast_row(window, self.base) {
-                    let raw = RawMessage {
-                        offset: row.offset,
-                        ty: b'D',
-                        payload: &window[row.data.start - 2..row.data.end],
-                    };
-                    let event = Event::Row(Row {
-                        timestamp: row.timestamp,
-                        offset: row.offset,
-                        data: &window[row.data],
-                        subscription: &self.walker.meta.subscriptions[row.sub],
-                        schema: &self.walker.meta.schema,
+                let mut failed = None;
+                self.walker
+                    .fast_rows(window, self.base, u64::MAX, |meta, row| {
+                        let raw = RawMessage {
+                            offset: row.offset,
+                            ty: b'D',
+                            payload: &window[row.data.start - 2..row.data.end],
+                        };
+                        let event = Event::Row(Row {
+                            timestamp: row.timestamp,
+                            offset: row.offset,
+                            data: &window[row.data],
+                            subscription: &meta.subscriptions[row.sub],
+                            schema: &meta.schema,
+                        });
+                        match f(meta, event, Some(raw)) {
+                            Ok(()) => true,
+                            Err(e) => {
+                                failed = Some(e);
+                                false
+                            }
+                        }
                     });
-                    f(&self.walker.meta, event, Some(raw))?;
+                if let Some(e) = failed {
+                    return Err(e);
                 }
             }
             let Some(next) = self.advance()? else {
