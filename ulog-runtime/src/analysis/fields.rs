@@ -402,13 +402,18 @@ fn reduce(bytes: &[u8], stride: usize, at: usize, p: Primitive, stat: &mut Stat)
         ($ty:ty, $fold:ident) => {{
             const SIZE: usize = size_of::<$ty>();
             assert!(at + SIZE <= stride, "the field is in the row");
-            let value = |r: &[u8]| {
-                let v: [u8; SIZE] = r[at..at + SIZE].try_into().expect("SIZE bytes");
-                <$ty>::from_le_bytes(v)
-            };
-            let quads = bytes.chunks_exact(stride * LANES);
-            let rest = quads.remainder().chunks_exact(stride).map(value);
-            let quads = quads.map(|q| std::array::from_fn(|l| value(&q[l * stride..])));
+            // From the first row's field on: each row's field starts a chunk of `stride`.
+            let fields = &bytes[at..];
+            let value =
+                |c: &[u8]| <$ty>::from_le_bytes(*c.first_chunk::<SIZE>().expect("in the row"));
+            let quads = fields.chunks_exact(stride * LANES);
+            let rest = quads.remainder().chunks(stride).map(value);
+            let quads = quads.map(|q| {
+                let (a, q) = q.split_at(stride);
+                let (b, q) = q.split_at(stride);
+                let (c, d) = q.split_at(stride);
+                [value(a), value(b), value(c), value(d)]
+            });
             $fold(quads, rest, stat)
         }};
     }

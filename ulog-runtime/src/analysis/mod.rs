@@ -360,7 +360,8 @@ pub struct Analyzer {
     sensors: sensors::Sensors,
     fields: fields::FieldStats,
     diagnostics: diagnostics::Diagnostics,
-    spectral: motion::Spectral,
+    steps: motion::Steps,
+    spectra: motion::Spectra,
     /// Per subscription: its topics' fields, bound at its first row.
     routes: Vec<Option<Box<Route>>>,
     /// Per subscription: 0 until its route is made, then 1 + whether any consumer takes
@@ -388,7 +389,8 @@ struct Route {
     motion: Option<motion::Fields>,
     sensors: Option<sensors::Fields>,
     diagnostics: Option<diagnostics::Fields>,
-    spectral: Option<motion::SpectralFields>,
+    steps: Option<motion::SpectralFields>,
+    spectra: Option<motion::SpectralFields>,
     fields: Option<usize>,
 }
 
@@ -398,8 +400,10 @@ struct Route {
 struct Parts {
     /// Modes, motion, sensors, diagnostics, parameters.
     core: bool,
-    /// Step responses and spectra.
-    spectral: bool,
+    /// Step responses.
+    steps: bool,
+    /// Spectra.
+    spectra: bool,
     /// Per-field statistics.
     fields: bool,
 }
@@ -408,7 +412,8 @@ impl Default for Parts {
     fn default() -> Parts {
         Parts {
             core: true,
-            spectral: true,
+            steps: true,
+            spectra: true,
             fields: true,
         }
     }
@@ -490,7 +495,8 @@ impl Analyzer {
                     || route.motion.is_some()
                     || route.sensors.is_some()
                     || route.diagnostics.is_some()
-                    || route.spectral.is_some();
+                    || route.steps.is_some()
+                    || route.spectra.is_some();
                 self.wanted[i] = 1 + u8::from(any);
                 self.routes[i] = Some(Box::new(route));
                 if !any {
@@ -515,8 +521,11 @@ impl Analyzer {
         if let Some(f) = &route.diagnostics {
             self.diagnostics.row(f, row.data, t, &self.state);
         }
-        if let Some(f) = &route.spectral {
-            self.spectral.row(f, row.data, t, &self.state);
+        if let Some(f) = &route.steps {
+            self.steps.row(f, row.data, t, &self.state);
+        }
+        if let Some(f) = &route.spectra {
+            self.spectra.row(f, row.data, t, &self.state);
         }
     }
 
@@ -530,18 +539,21 @@ impl Analyzer {
                 motion: None,
                 sensors: None,
                 diagnostics: None,
-                spectral: None,
+                steps: None,
+                spectra: None,
                 fields: None,
             };
         };
         let name = sub.name.as_str();
         let Parts {
             core,
-            spectral,
+            steps,
+            spectra,
             fields,
         } = self.parts;
+        let spectral = || motion::SpectralFields::bind(name, &index);
         Route {
-            state: if core || spectral {
+            state: if core || steps || spectra {
                 state::Fields::bind(name, &index)
             } else {
                 None
@@ -553,9 +565,8 @@ impl Analyzer {
             diagnostics: core
                 .then(|| diagnostics::Fields::bind(name, sub.multi_id, &index))
                 .flatten(),
-            spectral: spectral
-                .then(|| motion::SpectralFields::bind(name, &index))
-                .flatten(),
+            steps: steps.then(spectral).flatten(),
+            spectra: spectra.then(spectral).flatten(),
             fields: if fields {
                 self.fields.bind(sub, schema)
             } else {
@@ -588,8 +599,11 @@ impl Analyzer {
                 });
             }
         }
-        if self.parts.spectral {
-            (a.step_response, a.spectra) = self.spectral.finish(&mut missing);
+        if self.parts.steps {
+            a.step_response = self.steps.finish(&mut missing);
+        }
+        if self.parts.spectra {
+            a.spectra = self.spectra.finish(&mut missing);
         }
         if self.parts.fields {
             a.field_stats = self.fields.finish();
@@ -674,7 +688,7 @@ impl RowVisitor for Analyzer {
 
     fn append(&mut self, other: Analyzer) {
         debug_assert!(
-            !self.parts.core && !self.parts.spectral,
+            !self.parts.core && !self.parts.steps && !self.parts.spectra,
             "only the per-field statistics are taken in parts"
         );
         self.fields.merge(other.fields);

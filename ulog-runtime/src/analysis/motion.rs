@@ -147,11 +147,26 @@ pub(super) struct MotionStats {
 /// Finite values of three leaves.
 #[inline]
 fn read3(data: &[u8], leaves: &[Leaf; 3]) -> Option<[f64; 3]> {
-    let v = [
-        leaves[0].f64(data)?,
-        leaves[1].f64(data)?,
-        leaves[2].f64(data)?,
-    ];
+    use crate::schema::Primitive::Float;
+    let v = match *leaves {
+        // The common case, `float[3]` (or three floats in a row): one bounds check.
+        [
+            Leaf::Value(a, Float),
+            Leaf::Value(b, Float),
+            Leaf::Value(c, Float),
+        ] if b == a + 4 && c == a + 8 => {
+            let (xyz, _) = data.get(a..)?.split_first_chunk::<12>()?;
+            let (x, yz) = xyz.split_at(4);
+            let (y, z) = yz.split_at(4);
+            let f = |b: &[u8]| f64::from(f32::from_le_bytes(b.try_into().expect("4 bytes")));
+            [f(x), f(y), f(z)]
+        }
+        _ => [
+            leaves[0].f64(data)?,
+            leaves[1].f64(data)?,
+            leaves[2].f64(data)?,
+        ],
+    };
     v.iter().all(|x| x.is_finite()).then_some(v)
 }
 
@@ -186,6 +201,10 @@ impl MotionStats {
             }
             Fields::Rates { xyz, preferred } => {
                 self.seen_rates = true;
+                // The fallback's rates count only where the preferred source has none.
+                if !*preferred && accs.iter().all(|a| a.max_rate2.is_some()) {
+                    return;
+                }
                 if let Some(r) = read3(data, xyz) {
                     let rate2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
                     for a in accs.iter_mut() {
@@ -276,23 +295,19 @@ impl SpectralFields {
     }
 }
 
-/// The step responses and spectra, fed in flight.
+/// The rate controllers' step responses, fed in flight.
 #[derive(Debug, Clone, Default)]
-pub(super) struct Spectral {
+pub(super) struct Steps {
     /// Per axis: from the controller's measured rate, and from the raw gyro (older logs).
     steps: [StepResponse; 3],
     steps_raw: [StepResponse; 3],
-    gyro_raw: [Welch; 3],
-    gyro: [Welch; 3],
-    accel_raw: [Welch; 3],
-    accel: [Welch; 3],
     seen_setpoint: bool,
 }
 
-impl Spectral {
+impl Steps {
     pub(super) fn row(&mut self, f: &SpectralFields, data: &[u8], t: u64, state: &FlightState) {
         let keep = state.flying();
-        match f {
+        let (xyz, raw) = match f {
             SpectralFields::Setpoint(xyz) => {
                 self.seen_setpoint = true;
                 for (k, leaf) in xyz.iter().enumerate() {
@@ -301,71 +316,30 @@ impl Spectral {
                         self.steps_raw[k].setpoint(v.to_degrees());
                     }
                 }
+                return;
             }
-            SpectralFields::Gyro { xyz, raw } => {
-                // Steps from the controller's rates, else the raw gyro's; spectra from the
-                // raw gyro, else the controller's rates: a fallback is fed only until its
-                // preferred source has a result (from then on it would not be used).
-                let (feed_steps, feed_welch) = if *raw {
-                    (!self.steps.iter().all(StepResponse::has_response), true)
-                } else {
-                    (true, !self.gyro_raw.iter().all(Welch::has_estimate))
-                };
-                let (steps, welch) = if *raw {
-                    (&mut self.steps_raw, &mut self.gyro_raw)
-                } else {
-                    (&mut self.steps, &mut self.gyro)
-                };
-                for (k, leaf) in xyz.iter().enumerate() {
-                    if let Some(v) = leaf.f64(data) {
-                        if feed_steps && self.seen_setpoint {
-                            steps[k].gyro(t, v.to_degrees(), keep);
-                        }
-                        if feed_welch {
-                            welch[k].push(t, v, keep);
-                        }
-                    }
-                }
-            }
-            SpectralFields::Accel { xyz, raw } => {
-                if !*raw && self.accel_raw.iter().all(Welch::has_estimate) {
-                    return;
-                }
-                let welch = if *raw {
-                    &mut self.accel_raw
-                } else {
-                    &mut self.accel
-                };
-                for (k, leaf) in xyz.iter().enumerate() {
-                    if let Some(v) = leaf.f64(data) {
-                        welch[k].push(t, v, keep);
-                    }
-                }
-            }
-            SpectralFields::Combined { gyro, accel } => {
-                self.row(
-                    &SpectralFields::Gyro {
-                        xyz: *gyro,
-                        raw: true,
-                    },
-                    data,
-                    t,
-                    state,
-                );
-                self.row(
-                    &SpectralFields::Accel {
-                        xyz: *accel,
-                        raw: true,
-                    },
-                    data,
-                    t,
-                    state,
-                );
+            SpectralFields::Gyro { xyz, raw } => (xyz, *raw),
+            SpectralFields::Combined { gyro, .. } => (gyro, true),
+            SpectralFields::Accel { .. } => return,
+        };
+        // Steps from the controller's rates, else the raw gyro's: the fallback is fed only
+        // until the controller's rates give a response (from then on it would not be used).
+        if !self.seen_setpoint || (raw && self.steps.iter().all(StepResponse::has_response)) {
+            return;
+        }
+        let steps = if raw {
+            &mut self.steps_raw
+        } else {
+            &mut self.steps
+        };
+        for (k, leaf) in xyz.iter().enumerate() {
+            if let Some(v) = leaf.f64(data) {
+                steps[k].gyro(t, v.to_degrees(), keep);
             }
         }
     }
 
-    pub(super) fn finish(self, missing: &mut Vec<Missing>) -> (Vec<AxisResponse>, Vec<SpectrumOf>) {
+    pub(super) fn finish(self, missing: &mut Vec<Missing>) -> Vec<AxisResponse> {
         let mut responses = Vec::new();
         let names = ["roll", "pitch", "yaw"];
         for (k, (ctrl, raw)) in self.steps.into_iter().zip(self.steps_raw).enumerate() {
@@ -393,6 +367,54 @@ impl Spectral {
                 .to_owned(),
             });
         }
+        responses
+    }
+}
+
+/// The gyro's and the accelerometer's spectra, fed in flight.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Spectra {
+    gyro_raw: [Welch; 3],
+    gyro: [Welch; 3],
+    accel_raw: [Welch; 3],
+    accel: [Welch; 3],
+}
+
+impl Spectra {
+    pub(super) fn row(&mut self, f: &SpectralFields, data: &[u8], t: u64, state: &FlightState) {
+        let keep = state.flying();
+        // Spectra from the raw sensors, else the controller's rates and the filtered
+        // accelerations: a fallback is fed only until its preferred source has an estimate
+        // (from then on it would not be used).
+        let feed = |welch: &mut [Welch; 3], xyz: &[Leaf; 3]| {
+            for (w, leaf) in welch.iter_mut().zip(xyz) {
+                if let Some(v) = leaf.f64(data) {
+                    w.push(t, v, keep);
+                }
+            }
+        };
+        match f {
+            SpectralFields::Setpoint(_) => {}
+            SpectralFields::Gyro { xyz, raw: true } => feed(&mut self.gyro_raw, xyz),
+            SpectralFields::Gyro { xyz, raw: false } => {
+                if !self.gyro_raw.iter().all(Welch::has_estimate) {
+                    feed(&mut self.gyro, xyz);
+                }
+            }
+            SpectralFields::Accel { xyz, raw: true } => feed(&mut self.accel_raw, xyz),
+            SpectralFields::Accel { xyz, raw: false } => {
+                if !self.accel_raw.iter().all(Welch::has_estimate) {
+                    feed(&mut self.accel, xyz);
+                }
+            }
+            SpectralFields::Combined { gyro, accel } => {
+                feed(&mut self.gyro_raw, gyro);
+                feed(&mut self.accel_raw, accel);
+            }
+        }
+    }
+
+    pub(super) fn finish(self, missing: &mut Vec<Missing>) -> Vec<SpectrumOf> {
         let mut spectra = Vec::new();
         for (sensor, raw, other) in [
             ("gyro", self.gyro_raw, self.gyro),
@@ -418,6 +440,6 @@ impl Spectral {
                 reason: "no gyro or accelerometer run in flight as long as a segment".to_owned(),
             });
         }
-        (responses, spectra)
+        spectra
     }
 }

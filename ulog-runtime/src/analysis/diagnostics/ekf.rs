@@ -49,7 +49,10 @@ struct Track {
 /// Every estimator's innovations.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Ekf {
+    /// In the order they were first seen.
     tracks: Vec<((u8, usize), Track)>,
+    /// Per estimator instance and ratio (`multi_id * 6 + k`): its track's index + 1.
+    slots: Vec<u16>,
     found: Vec<(u8, usize, u64, u64, f64)>,
 }
 
@@ -60,14 +63,16 @@ impl Ekf {
             let Some(r) = leaf.f64(data).filter(|r| r.is_finite()) else {
                 continue;
             };
-            let key = (f.multi_id, k);
-            let track = match self.tracks.iter().position(|(x, _)| *x == key) {
-                Some(i) => &mut self.tracks[i].1,
-                None => {
-                    self.tracks.push((key, Track::default()));
-                    &mut self.tracks.last_mut().expect("pushed").1
-                }
-            };
+            let slot = usize::from(f.multi_id) * RATIOS.len() + k;
+            if self.slots.len() <= slot {
+                self.slots.resize(slot + 1, 0);
+            }
+            if self.slots[slot] == 0 {
+                self.tracks.push(((f.multi_id, k), Track::default()));
+                // At most 256 instances × 6 ratios.
+                self.slots[slot] = self.tracks.len() as u16;
+            }
+            let track = &mut self.tracks[usize::from(self.slots[slot]) - 1].1;
             let bad = flying && r > THRESHOLD;
             if bad {
                 track.worst = track.worst.max(r);

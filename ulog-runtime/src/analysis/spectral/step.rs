@@ -59,12 +59,9 @@ struct State {
     y: Vec<f64>,
     next: usize,
     filled: usize,
-    /// The setpoint's largest magnitudes in the ring: (sample number, |u|), each larger
-    /// than every later one (a window whose largest is within 20 deg/s is skipped before
-    /// its taper is computed: the taper only shrinks values).
-    largest: std::collections::VecDeque<(usize, f64)>,
-    /// Samples since the run began.
-    count: usize,
+    /// How many setpoints in the ring are above 20 deg/s: a window with none is skipped
+    /// before its taper is computed (the taper only shrinks values).
+    above_low: usize,
     window: Vec<f64>,
     /// Both signals of a window in one transform (the setpoint real, the rate imaginary).
     fft: Fft,
@@ -172,8 +169,7 @@ impl State {
             y: vec![0.0; flen],
             next: 0,
             filled: 0,
-            largest: std::collections::VecDeque::new(),
-            count: 0,
+            above_low: 0,
             window: hann_symmetric(flen),
             fft: Fft::new(len),
             real: RealFft::new(len),
@@ -191,12 +187,16 @@ impl State {
         self.filled = 0;
         self.since = 0;
         self.next_t = t;
-        self.largest.clear();
-        self.count = 0;
+        self.above_low = 0;
     }
 
     #[inline]
     fn push(&mut self, u: f64, y: f64) {
+        if self.filled == self.flen {
+            // The oldest sample, which this one replaces.
+            self.above_low -= usize::from(self.u[self.next].abs() > LOW);
+        }
+        self.above_low += usize::from(u.abs() > LOW);
         self.u[self.next] = u;
         self.y[self.next] = y;
         self.next = if self.next + 1 == self.flen {
@@ -205,19 +205,6 @@ impl State {
             self.next + 1
         };
         self.filled = (self.filled + 1).min(self.flen);
-        let size = u.abs();
-        while self.largest.back().is_some_and(|&(_, v)| v <= size) {
-            self.largest.pop_back();
-        }
-        self.largest.push_back((self.count, size));
-        self.count += 1;
-        while self
-            .largest
-            .front()
-            .is_some_and(|&(i, _)| i + self.flen < self.count)
-        {
-            self.largest.pop_front();
-        }
         self.since += 1;
         if self.filled == self.flen && self.since >= self.shift {
             self.since = 0;
@@ -232,7 +219,7 @@ impl State {
     }
 
     fn window_step(&mut self) {
-        if self.largest.front().is_none_or(|&(_, v)| v <= LOW) {
+        if self.above_low == 0 {
             return;
         }
         let peak = self
