@@ -398,8 +398,10 @@ struct Route {
 /// each running some, their analyses merged ([`Analysis::of_log`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 struct Parts {
-    /// Modes, motion, sensors, diagnostics, parameters.
+    /// Modes, sensors, diagnostics, parameters.
     core: bool,
+    /// Motion statistics.
+    motion: bool,
     /// Step responses.
     steps: bool,
     /// Spectra.
@@ -412,6 +414,7 @@ impl Default for Parts {
     fn default() -> Parts {
         Parts {
             core: true,
+            motion: true,
             steps: true,
             spectra: true,
             fields: true,
@@ -547,18 +550,19 @@ impl Analyzer {
         let name = sub.name.as_str();
         let Parts {
             core,
+            motion,
             steps,
             spectra,
             fields,
         } = self.parts;
         let spectral = || motion::SpectralFields::bind(name, &index);
         Route {
-            state: if core || steps || spectra {
+            state: if core || motion || steps || spectra {
                 state::Fields::bind(name, &index)
             } else {
                 None
             },
-            motion: core.then(|| motion::Fields::bind(name, &index)).flatten(),
+            motion: motion.then(|| motion::Fields::bind(name, &index)).flatten(),
             sensors: core
                 .then(|| sensors::Fields::bind(name, sub.multi_id, &index))
                 .flatten(),
@@ -583,7 +587,11 @@ impl Analyzer {
         if self.parts.core {
             (a.flight_modes, a.vtol_states, a.armed, a.flights) =
                 self.modes.finish(end, &self.state, &mut missing);
+        }
+        if self.parts.motion {
             a.stats = self.motion.finish(&mut missing);
+        }
+        if self.parts.core {
             (a.battery, a.gps_quality, a.vibration, a.gps_track) =
                 self.sensors.finish(meta, &self.modes, &mut missing);
             a.diagnostics = self.diagnostics.finish(end);
@@ -641,28 +649,40 @@ impl Analysis {
 
     /// The analysis of a whole file's bytes (a memory map, say): the same as
     /// [`Analysis::of_reader`] gives, without a row index. On a machine of more than one
-    /// core, the per-field statistics are taken on another thread, in a walk of their own
-    /// beside the one of the other analyses.
+    /// core, the per-field statistics and the motion statistics are taken on another
+    /// thread, in a walk of their own beside the one of the other analyses (about as much
+    /// work each).
     pub fn of_bytes(bytes: &[u8]) -> Result<Analysis, ReadError> {
         let single = std::thread::available_parallelism().map_or(1, NonZero::get) < 2;
         let (summary, mut analyzer) = if single {
             visit_rows(bytes, Analyzer::new(), 1)?
         } else {
             let rest = Parts {
+                motion: false,
                 fields: false,
                 ..Parts::default()
             };
-            let (rest, fields) = std::thread::scope(|s| {
-                let fields = s.spawn(|| visit_rows(bytes, fields::FieldStats::default(), 1));
+            let beside = FieldsAnd {
+                fields: fields::FieldStats::default(),
+                analyzer: Analyzer::of_parts(Parts {
+                    core: false,
+                    motion: true,
+                    steps: false,
+                    spectra: false,
+                    fields: false,
+                }),
+            };
+            let (rest, beside) = std::thread::scope(|s| {
+                let beside = s.spawn(|| visit_rows(bytes, beside, 1));
                 let rest = visit_rows(bytes, Analyzer::of_parts(rest), 1);
-                (
-                    rest,
-                    fields.join().expect("the field statistics do not panic"),
-                )
+                (rest, beside.join().expect("the analyses do not panic"))
             });
             let (summary, mut analyzer) = rest?;
+            let (_, beside) = beside?;
             analyzer.parts.fields = true;
-            analyzer.fields = fields?.1;
+            analyzer.fields = beside.fields;
+            analyzer.parts.motion = true;
+            analyzer.motion = beside.analyzer.motion;
             (summary, analyzer)
         };
         for d in &summary.diagnostics {
@@ -671,6 +691,35 @@ impl Analysis {
             }
         }
         Ok(analyzer.finish(&summary.metadata))
+    }
+}
+
+/// The per-field statistics of every row of a walk, and an analyzer given only the rows it
+/// takes (one lookup a row for both).
+struct FieldsAnd {
+    fields: fields::FieldStats,
+    analyzer: Analyzer,
+}
+
+impl RowVisitor for FieldsAnd {
+    #[inline]
+    fn row(&mut self, meta: &Metadata, row: &Row<'_>) {
+        RowVisitor::row(&mut self.fields, meta, row);
+        if self.analyzer.wanted.get(row.subscription.index()) != Some(&1) {
+            self.analyzer.row(meta, row);
+        }
+    }
+
+    fn fork(&self) -> FieldsAnd {
+        FieldsAnd {
+            fields: fields::FieldStats::default(),
+            analyzer: self.analyzer.fork(),
+        }
+    }
+
+    fn append(&mut self, other: FieldsAnd) {
+        self.fields.merge(other.fields);
+        self.analyzer.append(other.analyzer);
     }
 }
 
@@ -688,7 +737,7 @@ impl RowVisitor for Analyzer {
 
     fn append(&mut self, other: Analyzer) {
         debug_assert!(
-            !self.parts.core && !self.parts.steps && !self.parts.spectra,
+            !self.parts.core && !self.parts.motion && !self.parts.steps && !self.parts.spectra,
             "only the per-field statistics are taken in parts"
         );
         self.fields.merge(other.fields);
