@@ -325,6 +325,7 @@ impl ColumnValues {
     }
 
     /// The ULog type of the values (`char[N]` for text).
+    #[cfg(feature = "parquet")]
     pub(crate) fn type_name(&self) -> &'static str {
         match self {
             ColumnValues::Int8(_) => "int8_t",
@@ -344,6 +345,7 @@ impl ColumnValues {
     }
 
     /// Bytes of memory the values hold (a text's `String` and its bytes).
+    #[cfg(feature = "parquet")]
     pub(crate) fn memory(&self) -> usize {
         fn held<T>(v: &Vec<T>) -> usize {
             v.capacity() * size_of::<T>()
@@ -514,6 +516,7 @@ impl Columns {
     }
 
     /// Bytes of memory the values hold.
+    #[cfg(feature = "parquet")]
     pub(crate) fn memory(&self) -> usize {
         self.values.iter().map(ColumnValues::memory).sum()
     }
