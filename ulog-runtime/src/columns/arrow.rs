@@ -171,11 +171,13 @@ impl Iterator for RecordBatches<'_> {
     fn next(&mut self) -> Option<Self::Item> {
         loop {
             let mut read = 0;
+            // Room for this batch's rows: no more than the instance has left.
+            let room = self.rows.min(self.source.size_hint().0).min(1 << 16);
             let rows = (&mut self.source)
                 .take(self.rows)
                 .inspect(|_| read += 1)
                 .map(|r| (r.data, r.timestamp));
-            let columns = Columns::from_rows(self.spec.clone(), rows, self.rows.min(1 << 16));
+            let columns = Columns::from_rows(self.spec.clone(), rows, room);
             if columns.rows() > 0 {
                 return Some(record_batch(&self.schema, columns));
             }

@@ -1,0 +1,52 @@
+//! The time `Log::columns` and `columns::arrow::record_batches` take for every topic
+//! instance of a log, one after the other on one core (the log opened and its
+//! per-subscription index made before the clock starts): `columns S` and `batches S` lines.
+//! It uses only APIs older versions of the library have too, so that
+//! `benches/columns_vs.sh` can build it against another commit and run both interleaved.
+//!
+//! ```text
+//! cargo run --release -p ulog-benches --bin columns_speed -- LOG
+//! ```
+
+use std::time::Instant;
+
+fn main() {
+    let Some(path) = std::env::args().nth(1) else {
+        eprintln!("usage: columns_speed LOG");
+        std::process::exit(2);
+    };
+    let log = match ulog_runtime::Log::open(&path) {
+        Ok(log) => log,
+        Err(e) => {
+            eprintln!("columns_speed: {path}: {e}");
+            std::process::exit(1);
+        }
+    };
+    let mut instances = Vec::new();
+    for s in log.subscriptions() {
+        if !instances.contains(&(s.name.clone(), s.multi_id)) {
+            instances.push((s.name.clone(), s.multi_id));
+        }
+    }
+    // The per-subscription row index is made at its first use.
+    if let Some((name, multi_id)) = instances.first() {
+        let _ = log.columns(name, *multi_id);
+    }
+    let t = Instant::now();
+    let mut rows = 0;
+    for (name, multi_id) in &instances {
+        rows += log.columns(name, *multi_id).map_or(0, |c| c.rows());
+    }
+    println!("columns {:.6} {rows}", t.elapsed().as_secs_f64());
+    let t = Instant::now();
+    let mut rows = 0;
+    for (name, multi_id) in &instances {
+        for batch in ulog_runtime::columns::arrow::record_batches(&log, name, *multi_id, 1 << 16)
+            .into_iter()
+            .flatten()
+        {
+            rows += batch.map_or(0, |b| b.num_rows());
+        }
+    }
+    println!("batches {:.6} {rows}", t.elapsed().as_secs_f64());
+}
