@@ -546,7 +546,8 @@ fn fold_unsigned<T: Copy + Into<u64>>(
 
 /// A float field's values.
 trait Float: Copy + Into<f64> {
-    /// Smallest and largest of `a` and `b` (as `minss`/`maxss`: `b` if either is NaN).
+    /// Smallest and largest of `a` and `b` (only called where neither is NaN; `min` and
+    /// `max` make vector code of them).
     fn lesser(a: Self, b: Self) -> Self;
     fn greater(a: Self, b: Self) -> Self;
     const INFINITY: Self;
@@ -556,11 +557,11 @@ trait Float: Copy + Into<f64> {
 impl Float for f32 {
     #[inline(always)]
     fn lesser(a: f32, b: f32) -> f32 {
-        if a < b { a } else { b }
+        a.min(b)
     }
     #[inline(always)]
     fn greater(a: f32, b: f32) -> f32 {
-        if a > b { a } else { b }
+        a.max(b)
     }
     const INFINITY: f32 = f32::INFINITY;
     const NEG_INFINITY: f32 = f32::NEG_INFINITY;
@@ -569,11 +570,11 @@ impl Float for f32 {
 impl Float for f64 {
     #[inline(always)]
     fn lesser(a: f64, b: f64) -> f64 {
-        if a < b { a } else { b }
+        a.min(b)
     }
     #[inline(always)]
     fn greater(a: f64, b: f64) -> f64 {
-        if a > b { a } else { b }
+        a.max(b)
     }
     const INFINITY: f64 = f64::INFINITY;
     const NEG_INFINITY: f64 = f64::NEG_INFINITY;
