@@ -18,12 +18,45 @@ use ulog_runtime::read::ParamValue;
 use ulog_runtime::schema::{Format, Schema};
 use ulog_runtime::{Event, Log, StreamReader, ULog, Value, Writer, WriterOptions};
 
+/// The flight analysis of a log's bytes (its walks on two threads) equals that of its stream
+/// (one pass), but for the per-field means, summed in another order.
+fn analysis(log: &Log<'_>, data: &[u8]) {
+    use ulog_runtime::analysis::Analysis;
+    let walked = Analysis::of_log(log);
+    let Ok(streamed) = Analysis::of_reader(data) else {
+        panic!("the stream refuses a log the whole-file reader reads");
+    };
+    assert_eq!(walked.field_stats.len(), streamed.field_stats.len());
+    for (w, s) in walked.field_stats.iter().zip(&streamed.field_stats) {
+        assert_eq!(
+            (&w.topic, w.multi_id, &w.field, w.count),
+            (&s.topic, s.multi_id, &s.field, s.count)
+        );
+        let same = |a: f64, b: f64| a.total_cmp(&b).is_eq() || (a == b);
+        assert!(same(w.min, s.min) && same(w.max, s.max), "{w:?} vs {s:?}");
+        let close = (w.mean - s.mean).abs() <= 1e-9 * w.mean.abs().max(1.0)
+            || (w.mean.is_nan() && s.mean.is_nan())
+            || w.mean == s.mean;
+        assert!(close, "{w:?} vs {s:?}");
+    }
+    let strip = |mut a: Analysis| {
+        a.field_stats.clear();
+        format!("{a:?}")
+    };
+    assert_eq!(
+        strip(walked),
+        strip(streamed),
+        "the analysis of the walk and of the stream"
+    );
+}
+
 /// The whole-file reader, and everything built over it: rows and their values, topics,
 /// columns, CSV, events and the messages, pyulog's tools, the JSON document.
 pub fn whole_file(data: &[u8]) {
     let Ok(log) = Log::from_slice(data) else {
         return;
     };
+    analysis(&log, data);
     for row in log.data() {
         let _ = row.value();
     }
