@@ -470,37 +470,15 @@ fn fold_signed<T: Copy + Into<i64>>(
     rest: impl Iterator<Item = T>,
     stat: &mut Stat,
 ) {
-    let Stat::Signed {
+    if let Stat::Signed {
         min,
         max,
         sum,
         count,
     } = stat
-    else {
-        return;
-    };
-    let (mut lo, mut hi, mut total) = ([*min; LANES], [*max; LANES], [0i128; LANES]);
-    let mut n = 0u64;
-    let mut take = |l: usize, v: T| {
-        let v: i64 = v.into();
-        lo[l] = lo[l].min(v);
-        hi[l] = hi[l].max(v);
-        total[l] += i128::from(v);
-    };
-    for q in quads {
-        for (l, v) in q.into_iter().enumerate() {
-            take(l, v);
-        }
-        n += LANES as u64;
+    {
+        fold_integers(quads, rest, (min, max, sum, count));
     }
-    for v in rest {
-        take(0, v);
-        n += 1;
-    }
-    *min = lo.into_iter().fold(*min, i64::min);
-    *max = hi.into_iter().fold(*max, i64::max);
-    *sum += total.into_iter().sum::<i128>();
-    *count += n;
 }
 
 /// Folds unsigned integers into `stat` (an `Unsigned` one), as [`fold_signed`] does signed
@@ -511,22 +489,36 @@ fn fold_unsigned<T: Copy + Into<u64>>(
     rest: impl Iterator<Item = T>,
     stat: &mut Stat,
 ) {
-    let Stat::Unsigned {
+    if let Stat::Unsigned {
         min,
         max,
         sum,
         count,
     } = stat
-    else {
-        return;
-    };
-    let (mut lo, mut hi, mut total) = ([*min; LANES], [*max; LANES], [0u128; LANES]);
+    {
+        fold_integers(quads, rest, (min, max, sum, count));
+    }
+}
+
+/// Folds integers into running bounds (`B`, which every value converts into) and an exact
+/// sum (`S`, wider), and counts them.
+#[inline(always)]
+fn fold_integers<T, B, S>(
+    quads: impl Iterator<Item = [T; LANES]>,
+    rest: impl Iterator<Item = T>,
+    (min, max, sum, count): (&mut B, &mut B, &mut S, &mut u64),
+) where
+    T: Copy + Into<B>,
+    B: Copy + Ord,
+    S: Copy + Default + std::ops::AddAssign + From<B>,
+{
+    let (mut lo, mut hi, mut total) = ([*min; LANES], [*max; LANES], [S::default(); LANES]);
     let mut n = 0u64;
     let mut take = |l: usize, v: T| {
-        let v: u64 = v.into();
+        let v: B = v.into();
         lo[l] = lo[l].min(v);
         hi[l] = hi[l].max(v);
-        total[l] += u128::from(v);
+        total[l] += S::from(v);
     };
     for q in quads {
         for (l, v) in q.into_iter().enumerate() {
@@ -538,9 +530,11 @@ fn fold_unsigned<T: Copy + Into<u64>>(
         take(0, v);
         n += 1;
     }
-    *min = lo.into_iter().fold(*min, u64::min);
-    *max = hi.into_iter().fold(*max, u64::max);
-    *sum += total.into_iter().sum::<u128>();
+    *min = lo.into_iter().fold(*min, B::min);
+    *max = hi.into_iter().fold(*max, B::max);
+    for t in total {
+        *sum += t;
+    }
     *count += n;
 }
 

@@ -474,7 +474,7 @@ impl Analyzer {
     }
 
     /// Takes one row, in file order.
-    #[inline]
+    #[inline(always)]
     pub fn row(&mut self, meta: &Metadata, row: &Row<'_>) {
         if !self.started {
             self.started = true;

@@ -149,30 +149,7 @@ impl Framer {
             return None;
         }
         let p = usize::try_from(self.pos.checked_sub(base)?).ok()?;
-        let h = w.get(p..p + MESSAGE_HEADER_LEN + 2)?;
-        if h[2] != b'D' {
-            return None;
-        }
-        let size = u16::from_le_bytes([h[0], h[1]]);
-        let kind = self.d_kinds[usize::from(u16::from_le_bytes([h[3], h[4]]))];
-        let end = p + MESSAGE_HEADER_LEN + usize::from(size);
-        if !(kind.min <= size
-            && size <= kind.max
-            && kind.timestamp != NO_U64_TIMESTAMP
-            && base + end as u64 <= self.segment_end
-            && end <= w.len())
-        {
-            return None;
-        }
-        // Accepted rows hold the timestamp: it lies before any trailing padding.
-        let at = p + MESSAGE_HEADER_LEN + 2 + usize::from(kind.timestamp);
-        let timestamp = u64::from_le_bytes(w.get(at..at + 8)?.try_into().ok()?);
-        Some(PeekedRow {
-            at: p,
-            size: usize::from(size),
-            sub: kind.sub as usize,
-            timestamp,
-        })
+        self.data_at(w, p, self.end_max(w, base))
     }
 
     /// The fast path over a run of messages: from the current position, every `D` message
@@ -198,40 +175,15 @@ impl Framer {
         else {
             return 0;
         };
-        let to_index =
-            |offset: u64| usize::try_from(offset.saturating_sub(base)).unwrap_or(usize::MAX);
-        // Messages end within the window and the data segment, and start before `limit`.
-        let end_max = w.len().min(to_index(self.segment_end));
-        let stop = to_index(limit);
+        let end_max = self.end_max(w, base);
+        let stop = usize::try_from(limit.saturating_sub(base)).unwrap_or(usize::MAX);
         let (mut last, mut latest) = (None, 0);
         while p < stop {
-            let Some(h) = w.get(p..p + MESSAGE_HEADER_LEN + 2) else {
+            let Some(row) = self.data_at(w, p, end_max) else {
                 break;
             };
-            if h[2] != b'D' {
-                break;
-            }
-            let size = u16::from_le_bytes([h[0], h[1]]);
-            let kind = self.d_kinds[usize::from(u16::from_le_bytes([h[3], h[4]]))];
-            let end = p + MESSAGE_HEADER_LEN + usize::from(size);
-            if !(kind.min <= size
-                && size <= kind.max
-                && kind.timestamp != NO_U64_TIMESTAMP
-                && end <= end_max)
-            {
-                break;
-            }
-            let at = p + MESSAGE_HEADER_LEN + 2 + usize::from(kind.timestamp);
-            let Some(t) = w.get(at..at + 8) else {
-                break;
-            };
-            let timestamp = u64::from_le_bytes(t.try_into().expect("8 bytes"));
-            let more = f(PeekedRow {
-                at: p,
-                size: usize::from(size),
-                sub: kind.sub as usize,
-                timestamp,
-            });
+            let (timestamp, end) = (row.timestamp, row.at + MESSAGE_HEADER_LEN + row.size);
+            let more = f(row);
             latest = latest.max(timestamp);
             last = Some(p);
             p = end;
@@ -244,6 +196,42 @@ impl Framer {
             self.pos = base + p as u64;
         }
         latest
+    }
+
+    /// Where messages of the window `[base, base + w.len())` must end to be taken by the
+    /// fast path: within the window and within the data segment.
+    fn end_max(&self, w: &[u8], base: u64) -> usize {
+        let segment = usize::try_from(self.segment_end.saturating_sub(base)).unwrap_or(usize::MAX);
+        w.len().min(segment)
+    }
+
+    /// The fast path's row at index `p` of the window: a strongly plausible `D` message of a
+    /// subscription with a `uint64_t` timestamp, ending by `end_max`.
+    #[inline(always)]
+    fn data_at(&self, w: &[u8], p: usize, end_max: usize) -> Option<PeekedRow> {
+        let h = w.get(p..p + MESSAGE_HEADER_LEN + 2)?;
+        if h[2] != b'D' {
+            return None;
+        }
+        let size = u16::from_le_bytes([h[0], h[1]]);
+        let kind = self.d_kinds[usize::from(u16::from_le_bytes([h[3], h[4]]))];
+        let end = p + MESSAGE_HEADER_LEN + usize::from(size);
+        if !(kind.min <= size
+            && size <= kind.max
+            && kind.timestamp != NO_U64_TIMESTAMP
+            && end <= end_max)
+        {
+            return None;
+        }
+        // Accepted rows hold the timestamp: it lies before any trailing padding.
+        let at = p + MESSAGE_HEADER_LEN + 2 + usize::from(kind.timestamp);
+        let timestamp = u64::from_le_bytes(w.get(at..at + 8)?.try_into().ok()?);
+        Some(PeekedRow {
+            at: p,
+            size: usize::from(size),
+            sub: kind.sub as usize,
+            timestamp,
+        })
     }
 
     /// The start of the next message.

@@ -198,7 +198,6 @@ pub(crate) struct Fold<'f, T, I, F> {
     init: &'f I,
     fold: &'f F,
     pub(crate) parts: Vec<T>,
-    rows: usize,
 }
 
 impl<'f, T, I: Fn() -> T, F> Fold<'f, T, I, F> {
@@ -207,44 +206,26 @@ impl<'f, T, I: Fn() -> T, F> Fold<'f, T, I, F> {
             init,
             fold,
             parts: vec![init()],
-            rows: 0,
         }
     }
 }
 
-impl<T, I, F> RowSink for Fold<'_, T, I, F>
+impl<T, I, F> RowVisitor for Fold<'_, T, I, F>
 where
     T: Send,
     I: Fn() -> T + Sync,
     F: Fn(&mut T, &Row<'_>) + Sync,
 {
     #[inline]
-    fn row(&mut self, meta: &Metadata, offset: u64, data: &[u8], sub: usize, timestamp: u64) {
-        let row = Row {
-            timestamp,
-            offset,
-            data,
-            subscription: &meta.subscriptions[sub],
-            schema: &meta.schema,
-        };
+    fn row(&mut self, _: &Metadata, row: &Row<'_>) {
         if let Some(acc) = self.parts.last_mut() {
-            (self.fold)(acc, &row);
+            (self.fold)(acc, row);
         }
-        self.rows += 1;
     }
-    fn len(&self) -> usize {
-        self.rows
-    }
-    fn fork(&self, _: usize) -> Self {
-        Fold {
-            init: self.init,
-            fold: self.fold,
-            parts: vec![(self.init)()],
-            rows: 0,
-        }
+    fn fork(&self) -> Self {
+        Fold::new(self.init, self.fold)
     }
     fn append(&mut self, other: Self) {
-        self.rows += other.rows;
         self.parts.extend(other.parts);
         // Rows after the appended part start a new accumulator, keeping file order.
         self.parts.push((self.init)());
@@ -832,8 +813,12 @@ where
     I: Fn() -> T + Sync,
     F: Fn(&mut T, &Row<'_>) + Sync,
 {
-    let (metadata, mut all) = collect(bytes, Fold::new(&init, &fold), threads.max(1))?;
-    let parts = std::mem::take(&mut all.sink.parts);
+    let (metadata, mut all) = collect(
+        bytes,
+        Visiting::new(Fold::new(&init, &fold)),
+        threads.max(1),
+    )?;
+    let parts = std::mem::take(&mut all.sink.visitor.parts);
     Ok((summary(metadata, all), parts))
 }
 
@@ -848,10 +833,16 @@ pub(crate) trait RowVisitor: Send + Sized {
     fn append(&mut self, other: Self);
 }
 
-/// The sink of [`visit_rows`].
-struct Visiting<V> {
-    visitor: V,
+/// A visitor as a walk's sink ([`visit_rows`], [`fold_rows`]).
+pub(crate) struct Visiting<V> {
+    pub(crate) visitor: V,
     rows: usize,
+}
+
+impl<V> Visiting<V> {
+    pub(crate) fn new(visitor: V) -> Visiting<V> {
+        Visiting { visitor, rows: 0 }
+    }
 }
 
 impl<V: RowVisitor> RowSink for Visiting<V> {
@@ -889,7 +880,7 @@ pub(crate) fn visit_rows<V: RowVisitor>(
     visitor: V,
     threads: usize,
 ) -> Result<(Summary, V), ReadError> {
-    let (metadata, all) = collect(bytes, Visiting { visitor, rows: 0 }, threads.max(1))?;
+    let (metadata, all) = collect(bytes, Visiting::new(visitor), threads.max(1))?;
     let Collected {
         sink: Visiting { visitor, rows },
         logged,

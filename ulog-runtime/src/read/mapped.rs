@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use super::log::{Fold, RowSink, Summary, all_cores, collect, summary};
+use super::log::{Fold, RowSink, Summary, Visiting, all_cores, collect, summary};
 use super::{Metadata, ReadError, Row};
 
 /// A file mapped read-only into memory. Like every memory-mapped reader, it needs the file
@@ -73,12 +73,12 @@ impl MappedFile {
     {
         let release = |from: u64, to: u64| self.release(from, to);
         let sink = Releasing {
-            inner: Fold::new(&init, &fold),
+            inner: Visiting::new(Fold::new(&init, &fold)),
             release: &release,
             done: None,
         };
         let (metadata, mut all) = collect(&self.map, sink, threads.max(1))?;
-        let parts = std::mem::take(&mut all.sink.inner.parts);
+        let parts = std::mem::take(&mut all.sink.inner.visitor.parts);
         Ok((summary(metadata, all), parts))
     }
 
