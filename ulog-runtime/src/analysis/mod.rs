@@ -1,4 +1,4 @@
-//! Flight analysis: what a log says about the flight, in one pass over its rows. Flight
+//! Flight analysis: what a log says about the flight, from its rows in file order. Flight
 //! modes and VTOL states, armed and in-air intervals, flight statistics, battery, GPS
 //! quality and track, vibration, non-default parameters, per-field statistics, the rate
 //! controllers' step responses and the gyro and accelerometer spectra, and diagnostics of
@@ -13,6 +13,9 @@
 //!
 //! Each concern is its own file, a consumer of the same rows: `state` (armed, in air,
 //! mode), `modes`, `motion`, `sensors`, `fields`, `params`, [`diagnostics`], `spectral`.
+//! [`Analyzer`] feeds them one pass ([`Analysis::of_reader`]); over a whole file's bytes
+//! ([`Analysis::of_bytes`], [`Analysis::of_log`]) they share two walks on two threads, the
+//! per-field and motion statistics on one, the rest on the other, with the same result.
 //!
 //! ```no_run
 //! # fn main() -> Result<(), ulog_runtime::ReadError> {
@@ -652,6 +655,15 @@ impl Analysis {
     /// core, the per-field statistics and the motion statistics are taken on another
     /// thread, in a walk of their own beside the one of the other analyses (about as much
     /// work each).
+    ///
+    /// ```no_run
+    /// # fn main() -> Result<(), ulog_runtime::ReadError> {
+    /// use ulog_runtime::{analysis::Analysis, read::MappedFile};
+    /// let file = MappedFile::open("flight.ulg")?;
+    /// let analysis = Analysis::of_bytes(&file)?;
+    /// println!("{} flight modes", analysis.flight_modes.len());
+    /// # Ok(()) }
+    /// ```
     pub fn of_bytes(bytes: &[u8]) -> Result<Analysis, ReadError> {
         let single = std::thread::available_parallelism().map_or(1, NonZero::get) < 2;
         let (summary, mut analyzer) = if single {
