@@ -277,6 +277,7 @@ impl Subscription {
     }
 
     /// The dynamic decoding plan of the rows (`schema` is the log's).
+    #[inline]
     pub fn plan(&self, schema: &Schema) -> Option<&RowPlan> {
         let id = self.format?;
         // `format` is set only for formats `RowPlan::check` accepted.

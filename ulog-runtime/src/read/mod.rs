@@ -65,6 +65,7 @@ impl<'a> Row<'a> {
     }
 
     /// The dynamic decoding plan of this row's subscription.
+    #[inline]
     pub fn plan(&self) -> Option<&'a RowPlan> {
         self.subscription.plan(self.schema)
     }
