@@ -48,13 +48,20 @@ def cpu_model() -> str:
     return platform.processor() or "unknown"
 
 
+USAGE = "usage: python bench.py LOG [--runs N]  (needs the ulog package, pyulog==1.3.0 and numpy)"
+
+
 def main():
     args = sys.argv[1:]
     runs = 3
     if "--runs" in args:
         i = args.index("--runs")
+        if i + 1 >= len(args) or not args[i + 1].isdigit():
+            sys.exit(USAGE)
         runs = int(args[i + 1])
         del args[i:i + 2]
+    if len(args) != 1 or args[0].startswith("-"):
+        sys.exit(USAGE)
     path = args[0]
     results = {name: [] for name in WORK}
     names = list(WORK)
@@ -63,7 +70,11 @@ def main():
         for name in order:
             out = subprocess.run(
                 [sys.executable, "-c", CHILD.format(work=WORK[name]), path],
-                capture_output=True, text=True, check=True)
+                capture_output=True, text=True)
+            if out.returncode != 0:
+                # The child's own error (a missing module, an unreadable log), not a traceback
+                # of this script.
+                sys.exit(f"{name} failed:\n{out.stderr.strip()}")
             results[name].append(json.loads(out.stdout.strip().splitlines()[-1]))
     print(f"CPU: {cpu_model()}; {runs} runs each, interleaved; log {path}")
     med = {n: (statistics.median(x["wall"] for x in v), statistics.median(x["rss_mib"] for x in v))

@@ -13,10 +13,18 @@ pub(crate) struct Args {
     /// The logs.
     #[arg(required = true)]
     files: Vec<PathBuf>,
-    /// One JSON object per log (a line each), with flight-review-rs's keys where it has the
-    /// same fact.
+    /// One JSON object per log (a line each): `log`, the path as given, then the analysis,
+    /// with flight-review-rs's keys where it has the same fact.
     #[arg(long)]
     json: bool,
+}
+
+/// A line of `--json`: which log, then its analysis.
+#[derive(serde::Serialize)]
+struct Line<'a> {
+    log: std::borrow::Cow<'a, str>,
+    #[serde(flatten)]
+    analysis: &'a Analysis,
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
@@ -24,7 +32,11 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         let file = crate::cli::open_mapped(path)?;
         let analysis = Analysis::of_bytes(&file).map_err(|e| Failure::at(path, e))?;
         if args.json {
-            serde_json::to_writer(&mut *out, &analysis)?;
+            let line = Line {
+                log: path.to_string_lossy(),
+                analysis: &analysis,
+            };
+            serde_json::to_writer(&mut *out, &line)?;
             writeln!(out)?;
         } else {
             if i > 0 {

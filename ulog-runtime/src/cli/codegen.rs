@@ -1,4 +1,4 @@
-//! `ulog codegen`: the Rust types `crate::codegen` makes for logs or `.msg` folders.
+//! `ulog codegen`: the Rust types `ulog_runtime::codegen` makes for logs or `.msg` folders.
 
 use std::io::Write;
 use std::path::PathBuf;

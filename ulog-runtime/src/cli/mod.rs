@@ -55,7 +55,7 @@ enum Command {
     /// Rows as JSON Lines (one object per row), or one JSON document.
     Json(json::Args),
     /// Rust types for a log's formats (several logs: one type per topic that reads them
-    /// all), or for a folder of PX4 `.msg` files, as `crate::codegen` makes them.
+    /// all), or for a folder of PX4 `.msg` files, as `ulog_runtime::codegen` makes them.
     Codegen(codegen::Args),
     /// Whether the `.msg` files of a folder make exactly a log's formats, and where not.
     CheckMsg(check_msg::Args),

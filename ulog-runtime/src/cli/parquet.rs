@@ -105,11 +105,12 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         match result {
             Ok(c) => {
                 let rows: usize = c.files.iter().map(|f| f.rows).sum();
+                let n = c.files.len();
                 writeln!(
                     out,
-                    "{}: {} files, {rows} rows, {}",
+                    "{}: {n} {}, {rows} rows, {}",
                     path.display(),
-                    c.files.len(),
+                    if n == 1 { "file" } else { "files" },
                     c.metadata.display()
                 )?;
                 for note in &c.notes {

@@ -52,6 +52,7 @@ fn the_analysis_of_every_corpus_log_equals_numpy_on_pyulogs_arrays() {
         let name = short_name(&log);
         let json = stdout(&["analyze", "--json", log.to_str().unwrap()]);
         let analysis: serde_json::Value = serde_json::from_str(&json).unwrap();
+        assert_eq!(analysis["log"], log.to_str().unwrap(), "{name}: which log");
         // Every rule is about armed (or flying) time.
         let armed: Vec<(u64, u64)> = analysis["armed"]
             .as_array()
@@ -108,4 +109,30 @@ fn the_analysis_of_every_corpus_log_equals_numpy_on_pyulogs_arrays() {
     }
     eprintln!("{compared} facts compared with numpy");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn json_lines_name_their_logs_in_the_order_given() {
+    // (An empty corpus fails under CI in `corpus_files`.)
+    let logs: Vec<_> = corpus_files().into_iter().take(3).collect();
+    if logs.len() < 2 {
+        return;
+    }
+    let mut args = vec!["analyze", "--json"];
+    args.extend(logs.iter().rev().map(|l| l.to_str().unwrap()));
+    let out = stdout(&args);
+    let named: Vec<String> = out
+        .lines()
+        .map(|l| {
+            let v: serde_json::Value = serde_json::from_str(l).unwrap();
+            assert!(v["flight_modes"].is_array(), "an analysis follows: {l}");
+            v["log"].as_str().unwrap().to_owned()
+        })
+        .collect();
+    let given: Vec<String> = logs
+        .iter()
+        .rev()
+        .map(|l| l.to_str().unwrap().to_owned())
+        .collect();
+    assert_eq!(named, given);
 }
