@@ -288,7 +288,7 @@ impl<S: RowSink> Collected<S> {
                 return Ok(Walked::Limit);
             }
             let (sink, mut latest) = (&mut self.sink, self.max_timestamp);
-            let taken = walker.fast_rows(data, 0, limit, |meta, row| {
+            let taken = walker.fast_rows(data, 0, limit, false, |meta, row| {
                 sink.row(meta, row.offset, &data[row.data], row.sub, row.timestamp);
                 latest = latest.max(row.timestamp);
                 true

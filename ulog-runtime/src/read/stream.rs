@@ -277,7 +277,7 @@ impl<R: Read> StreamReader<R> {
             if self.pending.is_none() {
                 let window = &self.buf[self.start..self.end];
                 self.walker
-                    .fast_rows(window, self.base, u64::MAX, |meta, row| {
+                    .fast_rows(window, self.base, u64::MAX, false, |meta, row| {
                         f(Event::Row(Row {
                             timestamp: row.timestamp,
                             offset: row.offset,
@@ -334,7 +334,9 @@ impl<R: Read> StreamReader<R> {
                 let window = &self.buf[self.start..self.end];
                 let mut failed = None;
                 self.walker
-                    .fast_rows(window, self.base, u64::MAX, |meta, row| {
+                    // The metadata is the caller's to read at each row: its latest
+                    // timestamp includes the row's, as off the fast path.
+                    .fast_rows(window, self.base, u64::MAX, true, |meta, row| {
                         let raw = RawMessage {
                             offset: row.offset,
                             ty: b'D',

@@ -89,7 +89,9 @@ impl Welch {
         if state.segments >= MAX_SEGMENTS {
             return;
         }
-        let gap = self.last.is_some_and(|l| t <= l || t - l > 3 * state.dt_us);
+        let gap = self
+            .last
+            .is_some_and(|l| t <= l || t - l > state.dt_us.saturating_mul(3));
         if !keep || !x.is_finite() || gap {
             state.run.clear();
         }
@@ -172,6 +174,20 @@ impl State {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn timestamps_jumping_by_7e18_us_give_no_estimate_and_no_overflow() {
+        let mut w = Welch::default();
+        for i in 0..2_000u64 {
+            let t = if i % 2 == 1 {
+                7_000_000_000_000_000_000 + i
+            } else {
+                i
+            };
+            w.push(t, (i % 5) as f64, true);
+        }
+        assert!(w.finish().is_none());
+    }
 
     #[test]
     fn a_sine_shows_at_its_frequency_with_its_power() {

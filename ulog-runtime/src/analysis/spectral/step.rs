@@ -107,12 +107,18 @@ impl StepResponse {
             return;
         };
         let state = self.state.get_or_insert_with(|| State::new(dt, t));
+        if state.flen < 2 {
+            // A gyro logged every second or slower: no frame holds two samples, so no step.
+            self.last = Some((t, value));
+            return;
+        }
         let (Some((t0, v0)), Some(sp)) = (self.last, self.setpoint) else {
             self.last = Some((t, value));
             return;
         };
         self.last = Some((t, value));
-        if !keep || !value.is_finite() || t <= t0 || t - t0 > 3 * dt.max(state.dt_us) {
+        if !keep || !value.is_finite() || t <= t0 || t - t0 > dt.max(state.dt_us).saturating_mul(3)
+        {
             state.reset(t);
             return;
         }
@@ -470,6 +476,32 @@ mod tests {
         // A slower loop rises later.
         let slow = loop_response(0.1, 0.01).low.unwrap().1;
         assert!(slow[(0.05 * 250.0) as usize] < at(0.05) - 0.2);
+    }
+
+    #[test]
+    fn a_gyro_logged_every_second_or_slower_gives_no_response_and_no_panic() {
+        let steady = |dt_us: u64| move |i: u64| i * dt_us;
+        // Timestamps jumping between 0 and 7e18 µs: intervals (and their median) of 7e18.
+        let jumping = |i: u64| {
+            if i % 2 == 1 {
+                7_000_000_000_000_000_000 + i
+            } else {
+                i
+            }
+        };
+        let clocks: [(&str, Box<dyn Fn(u64) -> u64>); 3] = [
+            ("1.0002 s", Box::new(steady(1_000_200))),
+            ("2 s", Box::new(steady(2_000_000))),
+            ("7e18 µs", Box::new(jumping)),
+        ];
+        for (name, clock) in clocks {
+            let mut s = StepResponse::default();
+            for i in 0..400u64 {
+                s.setpoint(if i % 2 == 0 { 300.0 } else { -300.0 });
+                s.gyro(clock(i), (i % 7) as f64 * 50.0, true);
+            }
+            assert!(s.finish().is_none(), "{name}");
+        }
     }
 
     #[test]

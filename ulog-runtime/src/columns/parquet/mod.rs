@@ -71,7 +71,9 @@ pub struct ParquetOptions {
     /// least one row).
     pub batch_bytes: usize,
     /// Dictionary encoding (off: flight data rarely repeats enough to gain from it, and
-    /// dictionaries hold memory).
+    /// dictionaries hold memory). With it on, parquet-rs holds a column chunk's
+    /// dictionary-encoded pages until the chunk closes, before their compression: a chunk's
+    /// encoded size on top of the memory [`ParquetOptions::buffer_bytes`] describes.
     pub dictionary: bool,
     /// Min/max statistics per page (the column index) as well as per row group.
     pub page_statistics: bool,

@@ -867,3 +867,23 @@ fn any_single_bit_flip_of_a_rows_size_costs_at_most_that_row() {
         }
     }
 }
+
+#[test]
+fn for_each_message_shows_each_rows_time_in_the_metadata() {
+    // Runs of ten rows between syncs: the fast path takes each run in one go.
+    let (f, _) = clean(95);
+    let mut reader = StreamReader::new(&f.0[..]).unwrap();
+    let mut seen = Vec::new();
+    reader
+        .for_each_message(|meta, event, _| {
+            if let Event::Row(row) = &event {
+                seen.push((row.timestamp, meta.last_timestamp()));
+            }
+            Ok::<(), ReadError>(())
+        })
+        .unwrap();
+    assert_eq!(seen.len(), 95);
+    for (t, latest) in seen {
+        assert_eq!(latest, t, "the metadata's latest time at the row of {t}");
+    }
+}
