@@ -1,5 +1,5 @@
 //! What each fuzz target checks, one function per target, taking the fuzzer's bytes. The
-//! targets in `fuzz_targets/` call these; `tests/tests/robustness.rs` runs the same
+//! targets in `fuzz_targets/` call these; `tests/tests/integration/robustness.rs` runs the same
 //! functions on every saved input of `tests/fuzz_regressions/<target>/` under
 //! `cargo test` on stable. Nothing here but `ulog_runtime`, `serde_json` and std, so both can
 //! compile it.

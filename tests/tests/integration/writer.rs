@@ -6,7 +6,6 @@
 //!   two instances, every message type) and sees exactly what this reader sees and what was
 //!   written.
 
-#[path = "writer/rewrite.rs"]
 mod rewrite;
 
 use std::collections::HashMap;
@@ -287,7 +286,7 @@ fn pyulog_reads_what_the_writer_writes() {
     let path: PathBuf = dir.join("interop.ulg");
     std::fs::write(&path, &bytes).unwrap();
     let committed: Json =
-        serde_json::from_str(include_str!("../data/interop.ulg.oracle.json")).unwrap();
+        serde_json::from_str(include_str!("../../data/interop.ulg.oracle.json")).unwrap();
     let oracle = match pyulog_view(&path) {
         Some(o) => {
             if std::env::var_os("ULOG_REFRESH").is_some() {

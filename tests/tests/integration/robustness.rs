@@ -677,7 +677,7 @@ fn odd_logs_keep_at_least_what_pyulog_keeps() {
 
 /// The fuzz targets' checks (`fuzz/src/lib.rs`) on every input the fuzzers once failed on,
 /// kept in `tests/fuzz_regressions/<target>/`: each must now pass.
-#[path = "../../fuzz/src/lib.rs"]
+#[path = "../../../fuzz/src/lib.rs"]
 #[allow(dead_code, unreachable_pub)]
 mod fuzz_checks;
 

@@ -38,7 +38,7 @@ fn live_reference(files: &[std::path::PathBuf]) -> Option<Vec<Json>> {
 }
 
 fn committed_reference() -> HashMap<String, Json> {
-    let text = include_str!("../data/scan_reference.jsonl");
+    let text = include_str!("../../data/scan_reference.jsonl");
     text.lines()
         .map(|l| serde_json::from_str::<Json>(l).expect("valid JSON lines"))
         .map(|j| (j["sha256"].as_str().unwrap().to_owned(), j))
