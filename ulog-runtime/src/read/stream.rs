@@ -12,7 +12,7 @@ use super::{
 use crate::typed::{Topic, TypedDecoder, TypedError};
 
 /// Bytes read from the input at a time.
-const CHUNK: usize = 64 * 1024;
+const CHUNK: usize = 128 * 1024;
 
 /// One thing read from a stream.
 #[derive(Debug, Clone)]

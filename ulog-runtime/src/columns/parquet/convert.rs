@@ -234,8 +234,12 @@ impl Converter {
             }
             let hashing = source.hash_file.map(|p| s.spawn(move || hash_file(p)));
             let pass = self.pass(input, source, &encoder, hashing.is_none());
-            // The workers stop once the batches are encoded, failed or not.
+            // The workers stop once the batches are encoded, failed or not; this thread
+            // helps them with the last ones.
             encoder.finish();
+            if encoder.threads() > 0 {
+                encoder.work();
+            }
             let digest = hashing.map(|h| h.join().expect("hashing does not panic"));
             (pass, digest)
         });
@@ -882,11 +886,23 @@ fn close_all(tables: Vec<Table<Reopening>>, identity: &LogIdentity, threads: usi
         .collect();
     let results: Vec<std::sync::Mutex<Option<Closed>>> =
         slots.iter().map(|_| std::sync::Mutex::new(None)).collect();
+    // The tables holding most first, so that no large one is left to one thread at the end.
+    let mut order: Vec<usize> = (0..slots.len()).collect();
+    order.sort_by_cached_key(|&k| {
+        std::cmp::Reverse(
+            slots[k]
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+                .as_ref()
+                .map_or(0, Table::memory),
+        )
+    });
     let next = std::sync::atomic::AtomicUsize::new(0);
     let work = || {
         loop {
-            let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-            let Some(slot) = slots.get(k) else { break };
+            let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            let Some(&k) = order.get(i) else { break };
+            let slot = &slots[k];
             let table = slot
                 .lock()
                 .unwrap_or_else(std::sync::PoisonError::into_inner)

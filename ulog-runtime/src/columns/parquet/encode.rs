@@ -2,7 +2,9 @@
 //! ([`RowBatch`]) are made columns, their field statistics taken, and held until a row
 //! group is written, each table's batches in the order they came. Either on the reading
 //! thread ([`Encoder::inline`]) or on a pool of threads ([`Encoder::pool`]) that takes one
-//! table at a time each, so that one log uses every core. Either way, when the batches held
+//! table at a time each, so that one log uses every core; when the pool falls behind, the
+//! reading thread encodes batches too rather than wait for it, and it helps with the last
+//! ones once it has read everything. Either way, when the batches held
 //! by all tables pass the budget, the table holding most bytes per column is written as a
 //! row group (of those no other thread is encoding): each column chunk has a cost of its own
 //! (a column writer, its pages' headers, its metadata in the footer), so a table of many
@@ -191,11 +193,16 @@ impl<W: Output> Encoder<W> {
         }
         let mut st = self.lock();
         while st.in_flight > self.shared.in_flight_limit && st.failure.is_none() {
-            st = self
-                .shared
-                .room
-                .wait(st)
-                .unwrap_or_else(std::sync::PoisonError::into_inner);
+            // Rather than wait for the workers, encode a batch of theirs on this thread.
+            let (next, worked) = self.step(st)?;
+            st = if worked {
+                next
+            } else {
+                self.shared
+                    .room
+                    .wait(next)
+                    .unwrap_or_else(std::sync::PoisonError::into_inner)
+            };
         }
         if st.failure.is_some() {
             return Err(Stopped);
@@ -211,14 +218,19 @@ impl<W: Output> Encoder<W> {
         Ok(())
     }
 
-    /// A worker: encodes ready tables until [`Encoder::finish`] and no batch is left.
+    /// A worker: encodes ready tables until [`Encoder::finish`] and no batch is left. The
+    /// reading thread may call it too once it has given every batch, to help.
     pub(super) fn work(&self) {
         let mut st = self.lock();
         loop {
             if st.failure.is_some() {
                 return;
             }
-            let Some(t) = st.ready.pop_front() else {
+            let Ok((next, worked)) = self.step(st) else {
+                return;
+            };
+            st = next;
+            if !worked {
                 if st.done {
                     return;
                 }
@@ -227,46 +239,56 @@ impl<W: Output> Encoder<W> {
                     .work
                     .wait(st)
                     .unwrap_or_else(std::sync::PoisonError::into_inner);
-                continue;
-            };
-            let slot = &mut st.slots[t];
-            slot.queued = false;
-            // Being written as a row group by another worker, which requeues it after.
-            let Some(mut work) = slot.work.take() else {
-                continue;
-            };
-            let Some(batch) = slot.queue.pop_front() else {
-                slot.work = Some(work);
-                continue;
-            };
-            drop(st);
-            // One batch at a time, the budget looked at after each: the row groups are
-            // as large as the budget lets them be, not as many batches as came at once.
-            let bytes = batch.memory();
-            let result = work.append(batch);
-            st = self.lock();
-            st.in_flight -= bytes;
-            self.shared.room.notify_all();
-            st.slots[t].work = Some(work);
-            if let Err(e) = result {
-                st.fail(t, e);
-                drop(st);
-                self.wake_all();
-                return;
             }
-            st.measure(t);
-            st = match self.within_budget(st) {
-                Ok(st) => st,
-                Err((k, e)) => {
-                    let mut st = self.lock();
-                    st.fail(k, e);
-                    drop(st);
-                    self.wake_all();
-                    return;
-                }
-            };
-            st.requeue(t, &self.shared.work);
         }
+    }
+
+    /// One step of a worker: the next ready table's next batch encoded (and a row group
+    /// written if the tables then hold more than the budget). Whether there was a ready
+    /// table; [`Stopped`] if a table failed (the failure is kept, every thread woken).
+    fn step<'a>(
+        &'a self,
+        mut st: MutexGuard<'a, State<W>>,
+    ) -> Result<(MutexGuard<'a, State<W>>, bool), Stopped> {
+        let Some(t) = st.ready.pop_front() else {
+            return Ok((st, false));
+        };
+        let slot = &mut st.slots[t];
+        slot.queued = false;
+        // Being written as a row group by another thread, which requeues it after.
+        let Some(mut work) = slot.work.take() else {
+            return Ok((st, true));
+        };
+        let Some(batch) = slot.queue.pop_front() else {
+            slot.work = Some(work);
+            return Ok((st, true));
+        };
+        drop(st);
+        // One batch at a time, the budget looked at after each: the row groups are as
+        // large as the budget lets them be, not as many batches as came at once.
+        let bytes = batch.memory();
+        let result = work.append(batch);
+        st = self.lock();
+        st.in_flight -= bytes;
+        self.shared.room.notify_all();
+        st.slots[t].work = Some(work);
+        if let Err(e) = result {
+            st.fail(t, e);
+            drop(st);
+            self.wake_all();
+            return Err(Stopped);
+        }
+        st.measure(t);
+        let mut st = match self.within_budget(st) {
+            Ok(st) => st,
+            Err((k, e)) => {
+                self.lock().fail(k, e);
+                self.wake_all();
+                return Err(Stopped);
+            }
+        };
+        st.requeue(t, &self.shared.work);
+        Ok((st, true))
     }
 
     /// While the tables hold more than the budget, writes the table holding most bytes per

@@ -750,3 +750,90 @@ fn metadata_json_holds_the_flight_analysis_unless_left_out() {
     assert!(doc.get("files").is_some());
     std::fs::remove_dir_all(&root).unwrap();
 }
+
+/// An output shared with the test, to read back what a table wrote.
+#[derive(Clone, Default)]
+struct SharedOutput(std::sync::Arc<std::sync::Mutex<Vec<u8>>>);
+
+impl std::io::Write for SharedOutput {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.lock().unwrap().extend_from_slice(buf);
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl encode::Output for SharedOutput {}
+
+/// A reading thread that gives batches faster than the workers encode them encodes some
+/// itself rather than wait. With no worker started at all, it would wait forever; it
+/// encodes every batch, in order, and the table holds them all.
+#[test]
+fn the_reading_thread_encodes_batches_itself_when_the_workers_fall_behind() {
+    use encode::{Encoder, TableWork};
+    let log = Log::from_vec(log_bytes(1)).unwrap();
+    let sub = &log.subscriptions()[0];
+    assert_eq!(sub.name, "battery");
+    let spec = std::sync::Arc::new(
+        ColumnSpec::of(log.metadata().schema(), sub.format().unwrap()).unwrap(),
+    );
+    let identity = LogIdentity::of_log(&log, "f.ulg");
+    let out = SharedOutput::default();
+    let table = Table::new(&spec, "battery", 0, out.clone(), &ParquetOptions::default());
+    // One worker planned, none started.
+    let encoder = std::sync::Arc::new(Encoder::<SharedOutput>::pool(64 << 10, 1));
+    let t = encoder.add(TableWork { table, stats: None });
+    // 200,000 rows of 18 bytes: 3.6 MB, past the 1 MiB that may wait for a worker.
+    let rows = 200_000u64;
+    let (sent, done) = std::sync::mpsc::channel();
+    let reader = {
+        let (encoder, spec) = (encoder.clone(), spec.clone());
+        std::thread::spawn(move || {
+            for first in (0..rows).step_by(1000) {
+                let mut batch = crate::columns::RowBatch::with_capacity(spec.clone(), 1000);
+                for t in first..first + 1000 {
+                    let mut row = t.to_le_bytes().to_vec();
+                    row.extend_from_slice(&(t as f32 / 8.0).to_le_bytes());
+                    row.extend_from_slice(&[1, 0, 2, 0]);
+                    row.extend_from_slice(&(t as u16).to_le_bytes());
+                    assert!(batch.push(&row, t));
+                }
+                encoder.push(t, batch).unwrap();
+            }
+            encoder.finish();
+            // The batches still waiting, encoded on this thread too.
+            encoder.work();
+            sent.send(()).unwrap();
+        })
+    };
+    assert!(
+        done.recv_timeout(std::time::Duration::from_secs(30))
+            .is_ok(),
+        "the reading thread waited for a worker that never came"
+    );
+    reader.join().unwrap();
+    let mut tables = encoder.take_tables().map_err(|(_, e)| e).unwrap();
+    let work = tables.pop().unwrap();
+    let (written, counts) = work.table.close(&identity, true).unwrap();
+    assert!(written);
+    assert_eq!(counts.rows, rows as usize);
+    let bytes = bytes::Bytes::from(out.0.lock().unwrap().clone());
+    let reader = ParquetRecordBatchReaderBuilder::try_new(bytes).unwrap();
+    assert!(
+        reader.metadata().num_row_groups() > 1,
+        "the budget makes several"
+    );
+    let batches: Vec<RecordBatch> = reader.build().unwrap().map(Result::unwrap).collect();
+    let times: Vec<u64> = column::<UInt64Array>(&batches, "timestamp")
+        .into_iter()
+        .flat_map(|a| a.values().iter().copied())
+        .collect();
+    let volts: Vec<f32> = column::<Float32Array>(&batches, "voltage_v")
+        .into_iter()
+        .flat_map(|a| a.values().iter().copied())
+        .collect();
+    assert_eq!(times, (0..rows).collect::<Vec<_>>(), "every row, in order");
+    assert!(volts.iter().zip(0..).all(|(&v, t)| v == t as f32 / 8.0));
+}
