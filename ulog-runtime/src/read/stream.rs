@@ -11,7 +11,9 @@ use super::{
 };
 use crate::typed::{Topic, TypedDecoder, TypedError};
 
-/// Bytes read from the input at a time.
+/// The least free room in the buffer before a read, which asks for all the room there is
+/// (the buffer starts at four of these, 512 KiB; with 64 KiB, `scan --stream` took 30% more
+/// CPU time).
 const CHUNK: usize = 128 * 1024;
 
 /// One thing read from a stream.

@@ -837,3 +837,33 @@ fn the_reading_thread_encodes_batches_itself_when_the_workers_fall_behind() {
     assert_eq!(times, (0..rows).collect::<Vec<_>>(), "every row, in order");
     assert!(volts.iter().zip(0..).all(|(&v, t)| v == t as f32 / 8.0));
 }
+
+/// The reading thread and a worker encoding side by side (a small budget keeps the worker
+/// writing row groups, so batches pile up past the in-flight bound and the reader encodes
+/// some of them itself): each table still holds its rows, in order.
+#[test]
+fn a_reader_and_a_worker_encoding_side_by_side_keep_each_tables_rows_in_order() {
+    let rows = 150_000u64;
+    let bytes = log_bytes(rows);
+    let root = temp("side-by-side");
+    let options = ParquetOptions {
+        buffer_bytes: 16 << 10,
+        batch_bytes: 1 << 10,
+        encoders: Some(1),
+        ..ParquetOptions::default()
+    };
+    let conv = Converter::new(&root, options)
+        .convert_reader(&bytes[..], "f.ulg")
+        .unwrap();
+    let files = battery_values(&root, &conv);
+    assert_eq!(files.len(), 2);
+    for (m, (file, v, c, groups)) in files.into_iter().enumerate() {
+        let (ev, ec): (Vec<f32>, Vec<u16>) = (0..rows)
+            .filter(|t| m == 0 || t % 2 == 0)
+            .map(|t| (t as f32 / 8.0, t as u16))
+            .unzip();
+        assert!(v == ev && c == ec, "{file}: rows missing or out of order");
+        assert!(groups > 5, "{file}: {groups} row groups");
+    }
+    std::fs::remove_dir_all(&root).unwrap();
+}
