@@ -1,8 +1,9 @@
 //! Whole logs to Parquet in one streaming pass each: rows are collected per topic instance
 //! as they come and handed in batches to the [`Encoder`], which makes them columns and row
 //! groups beside the read (on other cores) while the pass feeds the flight analysis; the
-//! file is hashed on a thread of its own (or as it is read, for a reader); the tables'
-//! footers and `metadata.json` are written once the digest is known.
+//! file is hashed on a thread of its own when there are cores to spare (or as it is read,
+//! for a reader or on 2 cores); the tables' footers and `metadata.json` are written once
+//! the digest is known.
 
 use std::fs::File;
 use std::io::{self, Read};
@@ -179,8 +180,11 @@ impl Converter {
             file_name: &name,
             label: &path.display().to_string(),
             stem,
-            // With threads to spare, the file is hashed on one of its own.
-            hash_file: (encoders > 0).then_some(path),
+            // With two encoders or more, the file is hashed on a thread of its own; with
+            // one (2 cores, both busy), as it is read: one read of the file instead of two
+            // costs less (11 runs each, three times: 2 to 11% less CPU, wall 8% less to
+            // 1.5% more).
+            hash_file: (encoders > 1).then_some(path),
         };
         self.convert_source(file, &source, encoders)
     }

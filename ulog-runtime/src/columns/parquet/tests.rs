@@ -867,3 +867,37 @@ fn a_reader_and_a_worker_encoding_side_by_side_keep_each_tables_rows_in_order() 
     }
     std::fs::remove_dir_all(&root).unwrap();
 }
+
+/// A log file's SHA-256 is the same however it is taken: as the file is read (no encoder
+/// thread, or one), or on a thread of its own (two encoders or more).
+#[test]
+fn a_files_sha256_is_the_same_hashed_as_read_or_on_a_thread_of_its_own() {
+    let bytes = log_bytes(3000);
+    let dir = temp("sha-file");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("flight.ulg");
+    std::fs::write(&path, &bytes).unwrap();
+    let sha: String = sha2::Sha256::digest(&bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    for encoders in [Some(0), Some(1), Some(2), Some(3)] {
+        let root = dir.join(format!("out-{encoders:?}"));
+        let conv = Converter::new(
+            &root,
+            ParquetOptions {
+                encoders,
+                ..ParquetOptions::default()
+            },
+        )
+        .convert_file(&path)
+        .unwrap();
+        assert_eq!(conv.bytes, bytes.len() as u64, "{encoders:?}");
+        let meta: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&conv.metadata).unwrap()).unwrap();
+        assert_eq!(meta["log"]["sha256"], sha.as_str(), "{encoders:?}");
+        let (_, kv, _) = read(&conv.files[0].path);
+        assert_eq!(kv["ulog.sha256"], sha, "{encoders:?}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
