@@ -47,6 +47,14 @@ impl Interval {
     }
 }
 
+/// Whether a sample at `t` µs breaks a run of samples whose last was at `last`, `dt_us`
+/// apart: it is not after the last, or more than three intervals after it (the product
+/// saturates: crafted timestamps and intervals near `u64::MAX` do not overflow).
+#[inline]
+pub(crate) fn breaks_run(last: u64, t: u64, dt_us: u64) -> bool {
+    t <= last || t - last > dt_us.saturating_mul(3)
+}
+
 /// The symmetric Hann window of `n` points (`0.5 - 0.5 cos(2πk/(n-1))`), as numpy's
 /// `hanning`.
 pub(crate) fn hann_symmetric(n: usize) -> Vec<f64> {

@@ -1,7 +1,7 @@
 //! Welch's power spectral density of one signal, as it streams.
 
 use super::fft::{Complex, RealFft};
-use super::{Interval, hann_periodic};
+use super::{Interval, breaks_run, hann_periodic};
 
 /// Most segments averaged: enough for a smooth estimate, and a bound on the work.
 const MAX_SEGMENTS: usize = 4096;
@@ -89,9 +89,7 @@ impl Welch {
         if state.segments >= MAX_SEGMENTS {
             return;
         }
-        let gap = self
-            .last
-            .is_some_and(|l| t <= l || t - l > state.dt_us.saturating_mul(3));
+        let gap = self.last.is_some_and(|l| breaks_run(l, t, state.dt_us));
         if !keep || !x.is_finite() || gap {
             state.run.clear();
         }

@@ -3,7 +3,7 @@
 //! computes it, as the samples stream.
 
 use super::fft::{Complex, Fft, RealFft};
-use super::{Interval, hann_symmetric};
+use super::{Interval, breaks_run, hann_symmetric};
 
 /// The analysis rate: the gyro's, at most this (a 0.5 s response needs no more).
 const MAX_RATE_HZ: f64 = 500.0;
@@ -117,8 +117,7 @@ impl StepResponse {
             return;
         };
         self.last = Some((t, value));
-        if !keep || !value.is_finite() || t <= t0 || t - t0 > dt.max(state.dt_us).saturating_mul(3)
-        {
+        if !keep || !value.is_finite() || breaks_run(t0, t, dt.max(state.dt_us)) {
             state.reset(t);
             return;
         }

@@ -884,23 +884,15 @@ type Closed = Result<(bool, TableWritten), ParquetError>;
 /// Closes every table (its last row group and footer, with the log's identity) on up to
 /// `threads` threads; the results in the tables' order.
 fn close_all(tables: Vec<Table<Reopening>>, identity: &LogIdentity, threads: usize) -> Vec<Closed> {
+    // The tables holding most first, so that no large one is left to one thread at the end.
+    let mut order: Vec<usize> = (0..tables.len()).collect();
+    order.sort_by_key(|&k| std::cmp::Reverse(tables[k].memory()));
     let slots: Vec<std::sync::Mutex<Option<Table<Reopening>>>> = tables
         .into_iter()
         .map(|t| std::sync::Mutex::new(Some(t)))
         .collect();
     let results: Vec<std::sync::Mutex<Option<Closed>>> =
         slots.iter().map(|_| std::sync::Mutex::new(None)).collect();
-    // The tables holding most first, so that no large one is left to one thread at the end.
-    let mut order: Vec<usize> = (0..slots.len()).collect();
-    order.sort_by_cached_key(|&k| {
-        std::cmp::Reverse(
-            slots[k]
-                .lock()
-                .unwrap_or_else(std::sync::PoisonError::into_inner)
-                .as_ref()
-                .map_or(0, Table::memory),
-        )
-    });
     let next = std::sync::atomic::AtomicUsize::new(0);
     let work = || {
         loop {
