@@ -71,6 +71,52 @@ def test_tables_hold_pyulogs_values(corpus_log, capsys):
             assert np.array_equal(x, y, equal_nan=nan), (name, multi_id, col)
 
 
+def big_log(rows: int) -> bytes:
+    """A log written byte by byte from the spec: one topic of `rows` rows (a timestamp, a
+    float and an int16), its rows between those of a second topic."""
+    import struct
+
+    out = bytearray(b"ULog\x01\x12\x35" + bytes([1]) + struct.pack("<Q", 0))
+
+    def message(kind: bytes, body: bytes):
+        out.extend(struct.pack("<H", len(body)) + kind + body)
+
+    message(b"F", b"t:uint64_t timestamp;float x;int16_t k;")
+    message(b"F", b"u:uint64_t timestamp;uint8_t v;")
+    message(b"A", b"\x00" + struct.pack("<H", 0) + b"t")
+    message(b"A", b"\x00" + struct.pack("<H", 1) + b"u")
+    for i in range(rows):
+        message(b"D", struct.pack("<HQfh", 0, 1000 + i, i * 0.5, i % 30000 - 15000))
+        if i % 3 == 0:
+            message(b"D", struct.pack("<HQB", 1, 1000 + i, i % 256))
+    return bytes(out)
+
+
+def test_a_large_instances_table_is_made_in_parts_in_order(tmp_path):
+    # 100,000 rows: enough for a part per core (each at least 32,768 rows).
+    import os
+
+    import pyarrow as pa
+
+    path = tmp_path / "big.ulg"
+    path.write_bytes(big_log(100_000))
+    d = pyulog.ULog(str(path)).get_dataset("t")
+    log = ulog.open(str(path))
+    t = pa.table(log.table("t"))
+    cores = min(os.cpu_count() or 1, 8)
+    assert len(t.column("x").chunks) == min(cores, 3)
+    for col in ("timestamp", "x", "k"):
+        assert np.array_equal(t.column(col).to_numpy(), d.data[col]), col
+    assert np.array_equal(log.table("t").numpy()["x"], d.data["x"])
+    # Columns chosen, in the order asked for, from every part.
+    t = pa.table(log.table("t", columns=["k", "timestamp"]))
+    assert t.column_names == ["k", "timestamp"]
+    assert np.array_equal(t.column("k").to_numpy(), d.data["k"])
+    # A window (seconds): the rows from 0.05 s up to 0.08 s.
+    t = pa.table(log.table("t", start=0.05, end=0.08))
+    assert t.column("timestamp").to_pylist() == list(range(50_000, 80_000))
+
+
 def test_polars_duckdb_and_pandas_take_a_table():
     import duckdb
     import pandas as pd

@@ -288,4 +288,28 @@ fn all_columns_in_one_pass_equal_each_instances_columns() {
         );
         assert!(cols.rows() > 300, "{topic} {multi_id}: {}", cols.rows());
     }
+    // One instance's columns in parts on three threads (one of them a resubscribed
+    // instance, whose rows merge from two subscriptions): joined in order, its columns.
+    for (topic, multi_id, cols) in &all {
+        let parts = log.column_parts_on(3, 50, topic, *multi_id).unwrap();
+        assert_eq!(parts.len(), 3, "{topic} {multi_id}");
+        assert!(parts.iter().all(|p| p.rows() >= 50), "{topic} {multi_id}");
+        let mut joined = parts.into_iter().reduce(|mut a, b| {
+            a.append(b);
+            a
+        });
+        assert_eq!(joined.take().as_ref(), Some(cols), "{topic} {multi_id}");
+        // Too few rows for a second part: one.
+        let one = log
+            .column_parts_on(3, cols.rows(), topic, *multi_id)
+            .unwrap();
+        assert_eq!(one, std::slice::from_ref(cols), "{topic} {multi_id}");
+    }
+    // The errors of `columns`.
+    for (topic, multi_id) in [("tt", 0), ("t", 7)] {
+        assert_eq!(
+            log.column_parts(topic, multi_id).unwrap_err(),
+            log.columns(topic, multi_id).unwrap_err()
+        );
+    }
 }

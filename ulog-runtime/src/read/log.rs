@@ -659,6 +659,22 @@ impl<'a> Iterator for Rows<'a> {
 
 impl ExactSizeIterator for Rows<'_> {}
 
+impl<'a> Rows<'a> {
+    /// The rows left, in `parts` runs of consecutive rows (as many rows each as can be, in
+    /// order; fewer runs than `parts` when there are fewer rows).
+    pub(crate) fn split(self, parts: usize) -> Vec<Rows<'a>> {
+        let rows = self.rows.as_slice();
+        let per = rows.len().div_ceil(parts.max(1)).max(1);
+        rows.chunks(per)
+            .map(|run| Rows {
+                log: self.log,
+                rows: run.iter(),
+                span: self.span,
+            })
+            .collect()
+    }
+}
+
 impl DoubleEndedIterator for Rows<'_> {
     fn next_back(&mut self) -> Option<Self::Item> {
         self.rows.next_back().map(|&at| self.log.row_at(at))

@@ -234,6 +234,32 @@ pub enum InstanceRows<'a> {
     Merged(&'a Log<'a>, std::vec::IntoIter<u64>),
 }
 
+impl<'a> InstanceRows<'a> {
+    /// The rows left, in at most `parts` runs of consecutive rows, in order (for as many
+    /// threads to take one each).
+    pub(crate) fn split(self, parts: usize) -> Vec<InstanceRows<'a>> {
+        match self {
+            InstanceRows::One(rows) => rows
+                .split(parts)
+                .into_iter()
+                .map(InstanceRows::One)
+                .collect(),
+            InstanceRows::Merged(log, offsets) => {
+                let offsets = offsets.as_slice();
+                let per = offsets.len().div_ceil(parts.max(1)).max(1);
+                offsets
+                    .chunks(per)
+                    .map(|run| {
+                        // The variant owns its offsets.
+                        let run: Vec<u64> = run.to_vec();
+                        InstanceRows::Merged(log, run.into_iter())
+                    })
+                    .collect()
+            }
+        }
+    }
+}
+
 impl<'a> Iterator for InstanceRows<'a> {
     type Item = super::Row<'a>;
 
