@@ -223,9 +223,8 @@ impl Log {
 
     /// One topic instance's columns as a [`Table`]: only `columns` if given, in that order;
     /// only the rows of the window from `start` to `end` (seconds, as `ulog csv --start
-    /// --end` takes them). The GIL is released while the columns are made, on every core for
-    /// a large instance: without a window, the table's record batches are the parts the
-    /// cores made (`Log::column_parts` in Rust), in order.
+    /// --end` takes them). The GIL is released while the columns are made (on every core
+    /// for an instance of 65,536 rows or more).
     #[pyo3(signature = (topic, multi_id=0, columns=None, start=None, end=None))]
     fn table(
         &self,
@@ -310,16 +309,8 @@ fn make_table(
     start: Option<f64>,
     end: Option<f64>,
 ) -> Result<Table, TableError> {
-    // Without a window, the parts made on every core, each a record batch (the table's
-    // chunks, not copied together); a window's rows are cut from the whole.
-    let parts = if start.is_some() || end.is_some() {
-        let cols = log.columns(topic, multi_id).map_err(TableError::Columns)?;
-        vec![cols.window(&ulog_runtime::columns::Window::seconds(start, end))]
-    } else {
-        log.column_parts(topic, multi_id)
-            .map_err(TableError::Columns)?
-    };
-    let names: Vec<String> = parts[0].names().map(str::to_owned).collect();
+    let cols = log.columns(topic, multi_id).map_err(TableError::Columns)?;
+    let names: Vec<String> = cols.names().map(str::to_owned).collect();
     let indices: Vec<usize> = match &columns {
         None => (0..names.len()).collect(),
         Some(wanted) => wanted
@@ -337,18 +328,19 @@ fn make_table(
             })
             .collect::<Result<_, _>>()?,
     };
-    let schema = ulog_runtime::columns::arrow::schema(parts[0].spec(), topic);
-    let rows = parts.iter().map(|p| p.rows()).sum();
-    let batches = parts
-        .into_iter()
-        .map(|p| {
-            ulog_runtime::columns::arrow::record_batch(&schema, p).and_then(|b| b.project(&indices))
-        })
-        .collect::<Result<Vec<_>, _>>()
+    let cols = if start.is_some() || end.is_some() {
+        cols.window(&ulog_runtime::columns::Window::seconds(start, end))
+    } else {
+        cols
+    };
+    let schema = ulog_runtime::columns::arrow::schema(cols.spec(), topic);
+    let rows = cols.rows();
+    let batch = ulog_runtime::columns::arrow::record_batch(&schema, cols)
+        .and_then(|b| b.project(&indices))
         .map_err(|e| TableError::Arrow(e.to_string()))?;
     Ok(Table {
-        schema: batches[0].schema(),
-        batches,
+        schema: batch.schema(),
+        batches: vec![batch],
         rows,
         topic: topic.to_owned(),
         multi_id,

@@ -9,7 +9,8 @@
 //! column (the bytes up to the first zero, each as one character, as pyulog's `ulog2csv`
 //! shows them). [`ColumnBuilder`] takes rows in one pass (a copy of each row's bytes,
 //! made columns every few kilobytes, one loop a column) and hands them over as columns in
-//! batches of any size; [`RowBatch`] holds rows to be made columns later.
+//! batches of any size; [`RowBatch`] holds rows to be made columns later. `gather` makes a
+//! large instance's columns ([`Log::columns`]) on every core.
 //!
 //! ```
 //! use ulog_runtime::{Log, ULog, Writer, WriterOptions};
@@ -34,6 +35,7 @@
 pub mod arrow;
 pub mod csv;
 mod fields;
+mod gather;
 #[cfg(feature = "parquet")]
 pub mod parquet;
 
@@ -548,10 +550,6 @@ pub struct ColumnBuilder {
     capacity: usize,
 }
 
-/// Rows of a part of [`Log::column_parts`] at least: below, another thread costs more than
-/// it saves.
-const PART_MIN_ROWS: usize = 32_768;
-
 /// Bytes of rows staged before they are made columns: well within a core's L2 cache.
 const STAGE_BYTES: usize = 32 << 10;
 
@@ -892,6 +890,10 @@ impl Log<'_> {
     /// rows in file order), or why there are none: no such topic (with the closest names
     /// the log has), no such instance, or a format that cannot be read.
     ///
+    /// An instance's rows are scattered through the file, so gathering them waits on memory
+    /// more than it computes: an instance of 65,536 rows or more is gathered on every core
+    /// (up to 8), each core writing a run of consecutive rows in place.
+    ///
     /// ```
     /// # use ulog_runtime::{Log, ULog, Writer, WriterOptions};
     /// # #[derive(ULog)] struct Battery { timestamp: u64, voltage_v: f32 }
@@ -908,75 +910,30 @@ impl Log<'_> {
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn columns(&self, topic: &str, multi_id: u8) -> Result<Columns, ColumnsError> {
-        let (subs, spec) = self.instance_spec(topic, multi_id)?;
-        let rows = subs.iter().map(|s| self.rows(s).len()).sum();
-        Ok(Columns::from_rows(
-            spec,
-            self.instance_rows(&subs).map(|r| (r.data, r.timestamp)),
-            rows,
-        ))
-    }
-
-    /// [`Log::columns`] in parts, made side by side on every core (up to 8), each part a
-    /// run of consecutive rows: in order, the parts are the columns `Log::columns` gives.
-    /// An instance's rows are scattered through the file, so gathering them waits on
-    /// memory; two cores gather the parts of a large instance in about 0.6 of the time
-    /// one takes for the whole. For consumers that take chunks (an Arrow table of several
-    /// record batches, as the Python package's `Log.table` makes), this saves that time
-    /// without copying the parts together. Instances of fewer than 65,536 rows are one
-    /// part. The errors are those of `Log::columns`.
-    ///
-    /// ```
-    /// # use ulog_runtime::{Log, ULog, Writer, WriterOptions};
-    /// # #[derive(ULog)] struct Battery { timestamp: u64, voltage_v: f32 }
-    /// # let mut w = Writer::new(Vec::new(), WriterOptions::default())?;
-    /// # let sub = w.topic::<Battery>(0)?;
-    /// # for t in 0..3 { w.write(&sub, &Battery { timestamp: t, voltage_v: 16.0 })?; }
-    /// # let log = Log::from_vec(w.into_inner())?;
-    /// let parts = log.column_parts("battery", 0)?;
-    /// let rows: usize = parts.iter().map(|p| p.rows()).sum();
-    /// assert_eq!(rows, log.columns("battery", 0)?.rows());
-    /// # Ok::<(), Box<dyn std::error::Error>>(())
-    /// ```
-    pub fn column_parts(&self, topic: &str, multi_id: u8) -> Result<Vec<Columns>, ColumnsError> {
         let threads = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
-        self.column_parts_on(threads.clamp(1, 8), PART_MIN_ROWS, topic, multi_id)
+        self.columns_on(threads.min(8), gather::RUN_MIN_ROWS, topic, multi_id)
     }
 
-    /// [`Log::column_parts`] on at most `threads` threads, each part at least `min_rows`
-    /// rows.
-    pub(crate) fn column_parts_on(
+    /// [`Log::columns`] on at most `threads` threads, each taking `min_rows` rows or more.
+    pub(crate) fn columns_on(
         &self,
         threads: usize,
         min_rows: usize,
         topic: &str,
         multi_id: u8,
-    ) -> Result<Vec<Columns>, ColumnsError> {
+    ) -> Result<Columns, ColumnsError> {
         let (subs, spec) = self.instance_spec(topic, multi_id)?;
         let rows: usize = subs.iter().map(|s| self.rows(s).len()).sum();
-        let parts = (rows / min_rows.max(1)).clamp(1, threads.max(1));
-        let mut runs = self.instance_rows(&subs).split(parts).into_iter();
-        let make = |run: crate::read::InstanceRows<'_>| {
-            let len = run.size_hint().0;
-            Columns::from_rows(spec.clone(), run.map(|r| (r.data, r.timestamp)), len)
-        };
-        let Some(first) = runs.next() else {
-            return Ok(vec![Columns::from_rows(
-                spec.clone(),
-                std::iter::empty(),
-                0,
-            )]);
-        };
-        Ok(std::thread::scope(|scope| {
-            let others: Vec<_> = runs.map(|run| scope.spawn(move || make(run))).collect();
-            // This thread makes the first part meanwhile.
-            let mut out = vec![make(first)];
-            out.extend(
-                others
-                    .into_iter()
-                    .map(|h| h.join().expect("making columns does not panic")),
-            );
-            out
+        let runs = (rows / min_rows.max(1)).clamp(1, threads.max(1));
+        let gathered = (runs > 1)
+            .then(|| gather::columns(&spec, self.instance_rows(&subs).split(runs)))
+            .flatten();
+        Ok(gathered.unwrap_or_else(|| {
+            Columns::from_rows(
+                spec,
+                self.instance_rows(&subs).map(|r| (r.data, r.timestamp)),
+                rows,
+            )
         }))
     }
 

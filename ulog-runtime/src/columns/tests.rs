@@ -288,28 +288,78 @@ fn all_columns_in_one_pass_equal_each_instances_columns() {
         );
         assert!(cols.rows() > 300, "{topic} {multi_id}: {}", cols.rows());
     }
-    // One instance's columns in parts on three threads (one of them a resubscribed
-    // instance, whose rows merge from two subscriptions): joined in order, its columns.
+    // One instance's columns gathered on three threads (one of them a resubscribed
+    // instance, whose rows merge from two subscriptions), each writing its run of rows in
+    // place: the columns one thread makes.
     for (topic, multi_id, cols) in &all {
-        let parts = log.column_parts_on(3, 50, topic, *multi_id).unwrap();
-        assert_eq!(parts.len(), 3, "{topic} {multi_id}");
-        assert!(parts.iter().all(|p| p.rows() >= 50), "{topic} {multi_id}");
-        let mut joined = parts.into_iter().reduce(|mut a, b| {
-            a.append(b);
-            a
-        });
-        assert_eq!(joined.take().as_ref(), Some(cols), "{topic} {multi_id}");
-        // Too few rows for a second part: one.
-        let one = log
-            .column_parts_on(3, cols.rows(), topic, *multi_id)
-            .unwrap();
-        assert_eq!(one, std::slice::from_ref(cols), "{topic} {multi_id}");
+        let one = Columns::from_rows(
+            cols.spec().clone(),
+            log.instance_rows(&log.instance(topic, *multi_id))
+                .map(|r| (r.data, r.timestamp)),
+            0,
+        );
+        assert_eq!(&one, cols, "{topic} {multi_id}");
+        let three = log.columns_on(3, 50, topic, *multi_id).unwrap();
+        assert_eq!(&three, cols, "{topic} {multi_id}");
+        assert_eq!(three.rows(), cols.rows());
     }
-    // The errors of `columns`.
+    // The errors of one thread's.
     for (topic, multi_id) in [("tt", 0), ("t", 7)] {
         assert_eq!(
-            log.column_parts(topic, multi_id).unwrap_err(),
-            log.columns(topic, multi_id).unwrap_err()
+            log.columns_on(3, 50, topic, multi_id).unwrap_err(),
+            log.columns_on(1, 50, topic, multi_id).unwrap_err()
+        );
+    }
+}
+
+#[test]
+fn rows_too_short_leave_no_gap_between_the_runs_of_a_gathering() {
+    // Rows of 12 bytes, every seventh cut to its timestamp: the reader leaves those out
+    // (a diagnostic each), and the columns of the rest are the same made on one thread,
+    // two or three.
+    let mut f = FileHeader {
+        version: 1,
+        start_timestamp: 0,
+    }
+    .to_bytes()
+    .to_vec();
+    Message::Format(b"t:uint64_t timestamp;float x;")
+        .encode(&mut f)
+        .unwrap();
+    Message::Subscribe {
+        multi_id: 0,
+        msg_id: 0,
+        name: b"t",
+    }
+    .encode(&mut f)
+    .unwrap();
+    for i in 0..400u64 {
+        let mut data = i.to_le_bytes().to_vec();
+        if i % 7 != 3 {
+            data.extend_from_slice(&(i as f32).to_le_bytes());
+        }
+        Message::Data {
+            msg_id: 0,
+            data: &data,
+        }
+        .encode(&mut f)
+        .unwrap();
+    }
+    let log = Log::from_vec(f).unwrap();
+    let kept: Vec<u64> = (0..400).filter(|i| i % 7 != 3).collect();
+    let xs: Vec<f32> = kept.iter().map(|&i| i as f32).collect();
+    for threads in [1, 2, 3] {
+        let cols = log.columns_on(threads, 50, "t", 0).unwrap();
+        assert_eq!(cols.rows(), kept.len(), "{threads} threads");
+        assert_eq!(
+            cols.get("timestamp").unwrap().as_uint64(),
+            Some(&kept[..]),
+            "{threads} threads"
+        );
+        assert_eq!(
+            cols.get("x").unwrap().as_float(),
+            Some(&xs[..]),
+            "{threads} threads"
         );
     }
 }
