@@ -161,33 +161,12 @@ fn many_rows_fill_columns_across_the_builders_stages() {
 #[test]
 fn a_log_gives_the_columns_of_an_instance_with_unwrapped_timestamps() {
     // Version 0 with a uint16_t timestamp that wraps: the column holds the unwrapped µs.
-    let mut f = FileHeader {
-        version: 0,
-        start_timestamp: 0,
-    }
-    .to_bytes()
-    .to_vec();
-    Message::Format(b"t:uint16_t timestamp;float x;")
-        .encode(&mut f)
-        .unwrap();
-    Message::Subscribe {
-        multi_id: 0,
-        msg_id: 0,
-        name: b"t",
-    }
-    .encode(&mut f)
-    .unwrap();
-    for (ts, x) in [(65_000u16, 1.0f32), (100, 2.0)] {
+    let rows = [(65_000u16, 1.0f32), (100, 2.0)].map(|(ts, x)| {
         let mut data = ts.to_le_bytes().to_vec();
         data.extend_from_slice(&x.to_le_bytes());
-        Message::Data {
-            msg_id: 0,
-            data: &data,
-        }
-        .encode(&mut f)
-        .unwrap();
-    }
-    let log = Log::from_vec(f).unwrap();
+        data
+    });
+    let log = one_topic_log(0, b"t:uint16_t timestamp;float x;", &rows);
     let cols = log.columns("t", 0).unwrap();
     assert_eq!(cols.defs()[0].ulog_type, "uint16_t");
     assert_eq!(
@@ -317,35 +296,16 @@ fn rows_too_short_leave_no_gap_between_the_runs_of_a_gathering() {
     // Rows of 12 bytes, every seventh cut to its timestamp: the reader leaves those out
     // (a diagnostic each), and the columns of the rest are the same made on one thread,
     // two or three.
-    let mut f = FileHeader {
-        version: 1,
-        start_timestamp: 0,
-    }
-    .to_bytes()
-    .to_vec();
-    Message::Format(b"t:uint64_t timestamp;float x;")
-        .encode(&mut f)
-        .unwrap();
-    Message::Subscribe {
-        multi_id: 0,
-        msg_id: 0,
-        name: b"t",
-    }
-    .encode(&mut f)
-    .unwrap();
-    for i in 0..400u64 {
-        let mut data = i.to_le_bytes().to_vec();
-        if i % 7 != 3 {
-            data.extend_from_slice(&(i as f32).to_le_bytes());
-        }
-        Message::Data {
-            msg_id: 0,
-            data: &data,
-        }
-        .encode(&mut f)
-        .unwrap();
-    }
-    let log = Log::from_vec(f).unwrap();
+    let rows: Vec<Vec<u8>> = (0..400u64)
+        .map(|i| {
+            let mut data = i.to_le_bytes().to_vec();
+            if i % 7 != 3 {
+                data.extend_from_slice(&(i as f32).to_le_bytes());
+            }
+            data
+        })
+        .collect();
+    let log = one_topic_log(1, b"t:uint64_t timestamp;float x;", &rows);
     let kept: Vec<u64> = (0..400).filter(|i| i % 7 != 3).collect();
     let xs: Vec<f32> = kept.iter().map(|&i| i as f32).collect();
     for threads in [1, 2, 3] {
@@ -362,4 +322,26 @@ fn rows_too_short_leave_no_gap_between_the_runs_of_a_gathering() {
             "{threads} threads"
         );
     }
+}
+
+/// A log of one topic `t` of format `format`, instance 0, with `rows` as its data.
+fn one_topic_log(version: u8, format: &[u8], rows: &[Vec<u8>]) -> Log<'static> {
+    let mut f = FileHeader {
+        version,
+        start_timestamp: 0,
+    }
+    .to_bytes()
+    .to_vec();
+    Message::Format(format).encode(&mut f).unwrap();
+    Message::Subscribe {
+        multi_id: 0,
+        msg_id: 0,
+        name: b"t",
+    }
+    .encode(&mut f)
+    .unwrap();
+    for data in rows {
+        Message::Data { msg_id: 0, data }.encode(&mut f).unwrap();
+    }
+    Log::from_vec(f).unwrap()
 }
