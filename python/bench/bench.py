@@ -6,8 +6,8 @@ topic instance. Prints the medians of wall time and peak RSS, and the ratios.
 
     python bench.py LOG [--runs N]
 
-Build the package in release mode first (``maturin develop --release`` in ``python/``, or
-``pip install ./python``): a debug build measures nothing.
+Build the package optimized first (``maturin develop`` in ``python/``, or ``pip install
+./python``: both use the workspace's ``wheel`` profile): a debug build measures nothing.
 """
 
 import json
