@@ -223,8 +223,8 @@ impl Log {
 
     /// One topic instance's columns as a [`Table`]: only `columns` if given, in that order;
     /// only the rows of the window from `start` to `end` (seconds, as `ulog csv --start
-    /// --end` takes them). The GIL is released while the columns are made (on every core
-    /// for an instance of 65,536 rows or more).
+    /// --end` takes them). The GIL is released while the columns are made (on several
+    /// cores for an instance of 65,536 rows or more: `Log::columns` in Rust).
     #[pyo3(signature = (topic, multi_id=0, columns=None, start=None, end=None))]
     fn table(
         &self,

@@ -12,13 +12,20 @@
 //! [`ColumnBuilder`]: super::ColumnBuilder
 
 use std::mem::MaybeUninit;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use super::{ColumnSpec, ColumnValues, Columns, RowBatch, STAGE_BYTES, empty_columns};
 use crate::read::InstanceRows;
 
 /// Rows a thread takes at least: below, another thread costs more than it saves.
 pub(super) const RUN_MIN_ROWS: usize = 32_768;
+
+/// The threads a gathering uses at most: the machine's cores, up to 8 (asked once: the
+/// question costs a few reads of the control groups' files).
+pub(super) fn threads() -> usize {
+    static THREADS: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    *THREADS.get_or_init(|| std::thread::available_parallelism().map_or(1, |n| n.get().min(8)))
+}
 
 /// The columns of the rows of `runs` of `spec`, in order, each run on a thread of its own
 /// (the first on this one); `None` if a row was too short for the spec's `row_len`
@@ -35,25 +42,37 @@ pub(super) fn columns(spec: &Arc<ColumnSpec>, runs: Vec<InstanceRows<'_>>) -> Op
             slots[run].push(s);
         }
     }
-    let mut work = runs.into_iter().zip(slots);
+    // Each run's job, taken by the thread that gathers it.
+    let jobs: Vec<Mutex<Option<Job<'_, '_>>>> = runs
+        .into_iter()
+        .zip(slots)
+        .map(|job| Mutex::new(Some(job)))
+        .collect();
+    let gather = &|k: usize| {
+        let job = jobs[k].lock().ok().and_then(|mut j| j.take());
+        job.map_or(0, |(run, slots)| fill(spec, run, slots))
+    };
     let written: Vec<usize> = std::thread::scope(|scope| {
-        let first = work.next();
-        let others: Vec<_> = work
-            .map(|(run, slots)| scope.spawn(move || fill(spec, run, slots)))
+        let threads: Vec<_> = (1..jobs.len())
+            .map(|k| {
+                let thread = std::thread::Builder::new().spawn_scoped(scope, move || gather(k));
+                (k, thread)
+            })
             .collect();
-        let mut written: Vec<usize> = first
-            .into_iter()
-            .map(|(run, slots)| fill(spec, run, slots))
-            .collect();
-        written.extend(
-            others
-                .into_iter()
-                .map(|h| h.join().expect("gathering columns does not panic")),
-        );
+        let mut written = vec![gather(0)];
+        for (k, thread) in threads {
+            written.push(match thread {
+                Ok(t) => t.join().expect("gathering columns does not panic"),
+                // A thread the system refused: its run is gathered here.
+                Err(_) => gather(k),
+            });
+        }
         written
     });
     // The reader leaves out rows whose size is not their format's, so none is too short
-    // for the columns; were one left out, its run would leave slots unwritten: `None`.
+    // for the columns; were one left out, its run would leave slots unwritten: `None` (and
+    // the text already written, in vectors of no length, is never dropped: a leak, not an
+    // error).
     if written != lens {
         return None;
     }
@@ -78,6 +97,8 @@ fn fill(spec: &Arc<ColumnSpec>, run: InstanceRows<'_>, mut slots: Vec<Slots<'_>>
         let n = staged.rows();
         staged.append_to(&mut made);
         for (s, v) in slots.iter_mut().zip(&mut made) {
+            // What `filled` relies on: one value a row in every column, each in its slot.
+            assert_eq!(v.len(), n, "one value a row in every column");
             s.put(*at, v);
         }
         *at += n;
@@ -90,6 +111,9 @@ fn fill(spec: &Arc<ColumnSpec>, run: InstanceRows<'_>, mut slots: Vec<Slots<'_>>
     put(&mut staged, &mut at);
     at
 }
+
+/// A run of rows and its slots in every column.
+type Job<'r, 's> = (InstanceRows<'r>, Vec<Slots<'s>>);
 
 /// One run's share of one column: where its rows' values go.
 enum Slots<'a> {
@@ -156,6 +180,7 @@ impl Slots<'_> {
                 let Slots::$variant(slots) = self else {
                     unreachable!("slots and values of one spec");
                 };
+                assert!(at + $v.len() <= slots.len(), "a run's values fit its slots");
                 for (slot, value) in slots[at..].iter_mut().zip($v.drain(..)) {
                     slot.write(value);
                 }

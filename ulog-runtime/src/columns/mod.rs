@@ -891,8 +891,9 @@ impl Log<'_> {
     /// the log has), no such instance, or a format that cannot be read.
     ///
     /// An instance's rows are scattered through the file, so gathering them waits on memory
-    /// more than it computes: an instance of 65,536 rows or more is gathered on every core
-    /// (up to 8), each core writing a run of consecutive rows in place.
+    /// more than it computes: an instance of 65,536 rows or more is gathered on several
+    /// threads (one per 32,768 rows, as many as the machine has cores, at most 8), each
+    /// writing a run of consecutive rows in place.
     ///
     /// ```
     /// # use ulog_runtime::{Log, ULog, Writer, WriterOptions};
@@ -910,8 +911,7 @@ impl Log<'_> {
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn columns(&self, topic: &str, multi_id: u8) -> Result<Columns, ColumnsError> {
-        let threads = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
-        self.columns_on(threads.min(8), gather::RUN_MIN_ROWS, topic, multi_id)
+        self.columns_on(gather::threads(), gather::RUN_MIN_ROWS, topic, multi_id)
     }
 
     /// [`Log::columns`] on at most `threads` threads, each taking `min_rows` rows or more.

@@ -345,3 +345,59 @@ fn one_topic_log(version: u8, format: &[u8], rows: &[Vec<u8>]) -> Log<'static> {
     }
     Log::from_vec(f).unwrap()
 }
+
+#[test]
+fn threads_gathering_runs_of_many_batches_write_the_columns_one_thread_makes() {
+    // Rows of 216 bytes (about 150 a staged batch), a text column among numbers, 3,000 rows
+    // of one instance subscribed twice (its rows merged from two message ids): each thread's
+    // run spans several batches, each written after the last.
+    let mut f = FileHeader {
+        version: 1,
+        start_timestamp: 0,
+    }
+    .to_bytes()
+    .to_vec();
+    Message::Format(b"w:uint64_t timestamp;float x;char[200] s;int16_t k;bool b;uint8_t u;")
+        .encode(&mut f)
+        .unwrap();
+    for msg_id in [0, 1] {
+        Message::Subscribe {
+            multi_id: 0,
+            msg_id,
+            name: b"w",
+        }
+        .encode(&mut f)
+        .unwrap();
+    }
+    for i in 0..3_000u64 {
+        let mut data = (i * 10).to_le_bytes().to_vec();
+        data.extend_from_slice(&(i as f32 * 0.25).to_le_bytes());
+        let mut text = format!("row {i}").into_bytes();
+        text.resize(200, 0);
+        data.extend_from_slice(&text);
+        data.extend_from_slice(&((i % 600) as i16 - 300).to_le_bytes());
+        data.extend_from_slice(&[u8::from(i % 3 == 0), (i % 251) as u8]);
+        Message::Data {
+            msg_id: u16::from(i % 5 == 0),
+            data: &data,
+        }
+        .encode(&mut f)
+        .unwrap();
+    }
+    let log = Log::from_vec(f).unwrap();
+    let (subs, spec) = log.instance_spec("w", 0).unwrap();
+    assert_eq!(subs.len(), 2);
+    let one = Columns::from_rows(
+        spec.clone(),
+        log.instance_rows(&subs).map(|r| (r.data, r.timestamp)),
+        0,
+    );
+    assert_eq!(one.rows(), 3_000);
+    assert_eq!(one.get("s").unwrap().as_text().unwrap()[2_999], "row 2999");
+    for threads in [2, 3, 5, 8, 13] {
+        let gathered = super::gather::columns(&spec, log.instance_rows(&subs).split(threads))
+            .expect("no row is too short");
+        assert_eq!(gathered, one, "{threads} threads");
+        assert_eq!(gathered.rows(), 3_000, "{threads} threads");
+    }
+}
