@@ -106,7 +106,7 @@ def test_a_large_instances_table_is_gathered_on_every_core_in_order(tmp_path):
     for col in ("timestamp", "x", "k"):
         assert np.array_equal(t.column(col).to_numpy(), d.data[col]), col
     assert np.array_equal(log.table("t").numpy()["x"], d.data["x"])
-    # Columns chosen, in the order asked for, from every part.
+    # Columns chosen, in the order asked for.
     t = pa.table(log.table("t", columns=["k", "timestamp"]))
     assert t.column_names == ["k", "timestamp"]
     assert np.array_equal(t.column("k").to_numpy(), d.data["k"])
