@@ -20,13 +20,6 @@ use crate::read::InstanceRows;
 /// Rows a thread takes at least: below, another thread costs more than it saves.
 pub(super) const RUN_MIN_ROWS: usize = 32_768;
 
-/// The threads a gathering uses at most: the machine's cores, up to 8 (asked once: the
-/// question costs a few reads of the control groups' files).
-pub(super) fn threads() -> usize {
-    static THREADS: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
-    *THREADS.get_or_init(|| std::thread::available_parallelism().map_or(1, |n| n.get().min(8)))
-}
-
 /// The columns of the rows of `runs` of `spec`, in order, each run on a thread of its own
 /// (the first on this one); `None` if a row was too short for the spec's `row_len`
 /// ([`ColumnBuilder`] leaves such a row out; here it would leave a gap).

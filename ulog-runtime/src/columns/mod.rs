@@ -911,7 +911,12 @@ impl Log<'_> {
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn columns(&self, topic: &str, multi_id: u8) -> Result<Columns, ColumnsError> {
-        self.columns_on(gather::threads(), gather::RUN_MIN_ROWS, topic, multi_id)
+        self.columns_on(
+            crate::read::all_cores(),
+            gather::RUN_MIN_ROWS,
+            topic,
+            multi_id,
+        )
     }
 
     /// [`Log::columns`] on at most `threads` threads, each taking `min_rows` rows or more.
@@ -1022,10 +1027,7 @@ impl Log<'_> {
             specs.push(spec);
         }
         let n = self.row_count();
-        let threads = std::thread::available_parallelism()
-            .map_or(1, std::num::NonZero::get)
-            .clamp(1, 8)
-            .min(n.max(1));
+        let threads = crate::read::all_cores().min(n.max(1));
         let part = |range: std::ops::Range<usize>| {
             let mut builders: Vec<Option<ColumnBuilder>> = specs
                 .iter()

@@ -166,7 +166,12 @@ fn a_log_gives_the_columns_of_an_instance_with_unwrapped_timestamps() {
         data.extend_from_slice(&x.to_le_bytes());
         data
     });
-    let log = one_topic_log(0, b"t:uint16_t timestamp;float x;", &rows);
+    let log = one_topic_log(
+        0,
+        b"t:uint16_t timestamp;float x;",
+        &[0],
+        rows.map(|r| (0, r)),
+    );
     let cols = log.columns("t", 0).unwrap();
     assert_eq!(cols.defs()[0].ulog_type, "uint16_t");
     assert_eq!(
@@ -305,7 +310,12 @@ fn rows_too_short_leave_no_gap_between_the_runs_of_a_gathering() {
             data
         })
         .collect();
-    let log = one_topic_log(1, b"t:uint64_t timestamp;float x;", &rows);
+    let log = one_topic_log(
+        1,
+        b"t:uint64_t timestamp;float x;",
+        &[0],
+        rows.into_iter().map(|r| (0, r)),
+    );
     let kept: Vec<u64> = (0..400).filter(|i| i % 7 != 3).collect();
     let xs: Vec<f32> = kept.iter().map(|&i| i as f32).collect();
     for threads in [1, 2, 3] {
@@ -324,8 +334,14 @@ fn rows_too_short_leave_no_gap_between_the_runs_of_a_gathering() {
     }
 }
 
-/// A log of one topic `t` of format `format`, instance 0, with `rows` as its data.
-fn one_topic_log(version: u8, format: &[u8], rows: &[Vec<u8>]) -> Log<'static> {
+/// A log of one topic `t` of format `format`, instance 0 subscribed under each of
+/// `msg_ids`, with `rows` (message id, data) as its data.
+fn one_topic_log(
+    version: u8,
+    format: &[u8],
+    msg_ids: &[u16],
+    rows: impl IntoIterator<Item = (u16, Vec<u8>)>,
+) -> Log<'static> {
     let mut f = FileHeader {
         version,
         start_timestamp: 0,
@@ -333,15 +349,22 @@ fn one_topic_log(version: u8, format: &[u8], rows: &[Vec<u8>]) -> Log<'static> {
     .to_bytes()
     .to_vec();
     Message::Format(format).encode(&mut f).unwrap();
-    Message::Subscribe {
-        multi_id: 0,
-        msg_id: 0,
-        name: b"t",
+    for &msg_id in msg_ids {
+        Message::Subscribe {
+            multi_id: 0,
+            msg_id,
+            name: b"t",
+        }
+        .encode(&mut f)
+        .unwrap();
     }
-    .encode(&mut f)
-    .unwrap();
-    for data in rows {
-        Message::Data { msg_id: 0, data }.encode(&mut f).unwrap();
+    for (msg_id, data) in rows {
+        Message::Data {
+            msg_id,
+            data: &data,
+        }
+        .encode(&mut f)
+        .unwrap();
     }
     Log::from_vec(f).unwrap()
 }
@@ -351,25 +374,7 @@ fn threads_gathering_runs_of_many_batches_write_the_columns_one_thread_makes() {
     // Rows of 216 bytes (about 150 a staged batch), a text column among numbers, 3,000 rows
     // of one instance subscribed twice (its rows merged from two message ids): each thread's
     // run spans several batches, each written after the last.
-    let mut f = FileHeader {
-        version: 1,
-        start_timestamp: 0,
-    }
-    .to_bytes()
-    .to_vec();
-    Message::Format(b"w:uint64_t timestamp;float x;char[200] s;int16_t k;bool b;uint8_t u;")
-        .encode(&mut f)
-        .unwrap();
-    for msg_id in [0, 1] {
-        Message::Subscribe {
-            multi_id: 0,
-            msg_id,
-            name: b"w",
-        }
-        .encode(&mut f)
-        .unwrap();
-    }
-    for i in 0..3_000u64 {
+    let rows = (0..3_000u64).map(|i| {
         let mut data = (i * 10).to_le_bytes().to_vec();
         data.extend_from_slice(&(i as f32 * 0.25).to_le_bytes());
         let mut text = format!("row {i}").into_bytes();
@@ -377,15 +382,15 @@ fn threads_gathering_runs_of_many_batches_write_the_columns_one_thread_makes() {
         data.extend_from_slice(&text);
         data.extend_from_slice(&((i % 600) as i16 - 300).to_le_bytes());
         data.extend_from_slice(&[u8::from(i % 3 == 0), (i % 251) as u8]);
-        Message::Data {
-            msg_id: u16::from(i % 5 == 0),
-            data: &data,
-        }
-        .encode(&mut f)
-        .unwrap();
-    }
-    let log = Log::from_vec(f).unwrap();
-    let (subs, spec) = log.instance_spec("w", 0).unwrap();
+        (u16::from(i % 5 == 0), data)
+    });
+    let log = one_topic_log(
+        1,
+        b"t:uint64_t timestamp;float x;char[200] s;int16_t k;bool b;uint8_t u;",
+        &[0, 1],
+        rows,
+    );
+    let (subs, spec) = log.instance_spec("t", 0).unwrap();
     assert_eq!(subs.len(), 2);
     let one = Columns::from_rows(
         spec.clone(),

@@ -12,7 +12,7 @@ mod stream;
 mod topics;
 
 pub use log::{DataRows, Log, Rows, Summary, fold_rows, fold_rows_on, summarize};
-pub(crate) use log::{RowVisitor, visit_rows};
+pub(crate) use log::{RowVisitor, all_cores, visit_rows};
 #[cfg(feature = "mmap")]
 pub use mapped::MappedFile;
 pub use message::{
