@@ -12,10 +12,10 @@
 //! [`ColumnBuilder`]: super::ColumnBuilder
 
 use std::mem::MaybeUninit;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 use super::{ColumnSpec, ColumnValues, Columns, RowBatch, STAGE_BYTES, empty_columns};
-use crate::read::InstanceRows;
+use crate::read::{InstanceRows, on_threads};
 
 /// Rows a thread takes at least: below, another thread costs more than it saves.
 pub(super) const RUN_MIN_ROWS: usize = 32_768;
@@ -35,33 +35,8 @@ pub(super) fn columns(spec: &Arc<ColumnSpec>, runs: Vec<InstanceRows<'_>>) -> Op
             slots[run].push(s);
         }
     }
-    // Each run's job, taken by the thread that gathers it.
-    let jobs: Vec<Mutex<Option<Job<'_, '_>>>> = runs
-        .into_iter()
-        .zip(slots)
-        .map(|job| Mutex::new(Some(job)))
-        .collect();
-    let gather = &|k: usize| {
-        let job = jobs[k].lock().ok().and_then(|mut j| j.take());
-        job.map_or(0, |(run, slots)| fill(spec, run, slots))
-    };
-    let written: Vec<usize> = std::thread::scope(|scope| {
-        let threads: Vec<_> = (1..jobs.len())
-            .map(|k| {
-                let thread = std::thread::Builder::new().spawn_scoped(scope, move || gather(k));
-                (k, thread)
-            })
-            .collect();
-        let mut written = vec![gather(0)];
-        for (k, thread) in threads {
-            written.push(match thread {
-                Ok(t) => t.join().expect("gathering columns does not panic"),
-                // A thread the system refused: its run is gathered here.
-                Err(_) => gather(k),
-            });
-        }
-        written
-    });
+    let jobs: Vec<Job<'_, '_>> = runs.into_iter().zip(slots).collect();
+    let written = on_threads(jobs, |(run, slots)| fill(spec, run, slots));
     // The reader leaves out rows whose size is not their format's, so none is too short
     // for the columns; were one left out, its run would leave slots unwritten: `None` (and
     // the text already written, in vectors of no length, is never dropped: a leak, not an

@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use super::metadata::Applied;
+use super::threads::on_threads;
 use super::{
     Diagnostic, Dropout, FileHeader, FlagBits, LoggedMessage, MESSAGE_HEADER_LEN, Metadata,
     ParameterChange, ReadError, Row, Step, Subscription, Walker,
@@ -28,9 +29,9 @@ impl Bytes<'_> {
     }
 }
 
-/// File offsets of the data rows, in file order, 4 bytes a row: chunks of offsets relative to
-/// a base, a new chunk where the distance no longer fits (and one per part read in parallel,
-/// moved in rather than copied).
+/// File offsets of the data rows, in file order, and their subscriptions, 6 bytes a row:
+/// chunks of offsets relative to a base, a new chunk where the distance no longer fits (and
+/// one per part read in parallel, moved in rather than copied).
 #[derive(Debug, Default)]
 struct RowIndex {
     chunks: Vec<Chunk>,
@@ -44,7 +45,12 @@ struct Chunk {
     /// Row number of `offsets[0]`.
     first: usize,
     offsets: Vec<u32>,
+    /// Each row's subscription, or [`MANY`] for one numbered that or higher.
+    subs: Vec<u16>,
 }
+
+/// [`Chunk::subs`]: a subscription found from the row's message instead.
+const MANY: u16 = u16::MAX;
 
 impl Chunk {
     fn end(&self) -> usize {
@@ -65,24 +71,30 @@ impl RowIndex {
     }
 
     #[inline]
-    fn push(&mut self, offset: u64) {
+    fn push(&mut self, offset: u64, sub: usize) {
+        let sub = u16::try_from(sub).unwrap_or(MANY);
         if let Some(c) = self.chunks.last_mut()
             && let Ok(rel) = u32::try_from(offset - c.base)
         {
             c.offsets.push(rel);
+            c.subs.push(sub);
             return;
         }
-        self.new_chunk(offset);
+        self.new_chunk(offset, sub);
     }
 
     #[cold]
-    fn new_chunk(&mut self, offset: u64) {
-        let mut offsets = Vec::with_capacity(std::mem::take(&mut self.reserve).max(1024));
+    fn new_chunk(&mut self, offset: u64, sub: u16) {
+        let reserve = std::mem::take(&mut self.reserve).max(1024);
+        let mut offsets = Vec::with_capacity(reserve);
         offsets.push(0);
+        let mut subs = Vec::with_capacity(reserve);
+        subs.push(sub);
         self.chunks.push(Chunk {
             base: offset,
             first: self.len(),
             offsets,
+            subs,
         });
     }
 
@@ -100,10 +112,28 @@ impl RowIndex {
         (c.base + u64::from(c.offsets[i - c.first]), k)
     }
 
+    /// Calls `f` with the offset of each row of `range` and its subscription (or [`MANY`]),
+    /// in order.
+    fn for_each_offset(&self, range: std::ops::Range<usize>, mut f: impl FnMut(u64, u16)) {
+        let first = self.chunks.partition_point(|c| c.end() <= range.start);
+        for c in &self.chunks[first..] {
+            if c.first >= range.end {
+                break;
+            }
+            let from = range.start.max(c.first);
+            let to = range.end.min(c.end());
+            let rows = from - c.first..to - c.first;
+            for (&rel, &sub) in c.offsets[rows.clone()].iter().zip(&c.subs[rows]) {
+                f(c.base + u64::from(rel), sub);
+            }
+        }
+    }
+
     fn shrink_to_fit(&mut self) {
-        self.chunks
-            .iter_mut()
-            .for_each(|c| c.offsets.shrink_to_fit());
+        self.chunks.iter_mut().for_each(|c| {
+            c.offsets.shrink_to_fit();
+            c.subs.shrink_to_fit();
+        });
     }
 }
 
@@ -158,8 +188,8 @@ pub(crate) trait RowSink: Send + Sized {
 
 impl RowSink for RowIndex {
     #[inline]
-    fn row(&mut self, _: &Metadata, offset: u64, _: &[u8], _: usize, _: u64) {
-        self.push(offset);
+    fn row(&mut self, _: &Metadata, offset: u64, _: &[u8], sub: usize, _: u64) {
+        self.push(offset, sub);
     }
     fn len(&self) -> usize {
         RowIndex::len(self)
@@ -477,14 +507,69 @@ impl<'a> Log<'a> {
     /// The file offsets of the messages of the rows of the `index`-th subscription, in file
     /// order.
     pub(crate) fn row_offsets(&self, index: usize) -> &[u64] {
-        let by_sub = self.by_sub.get_or_init(|| {
-            let mut by_sub = vec![Vec::new(); self.meta.subscriptions.len()];
-            for row in self.data() {
-                by_sub[row.subscription.index].push(row.offset);
-            }
-            by_sub
-        });
+        let by_sub = self
+            .by_sub
+            .get_or_init(|| self.offsets_by_subscription(all_cores(), MIN_ROWS_A_THREAD));
         &by_sub[index]
+    }
+
+    /// The file offsets of each subscription's rows, in file order, the index split in
+    /// runs of rows, one a thread (up to `threads`, a thread for `min_rows` rows or more):
+    /// each run's rows counted per subscription (which the index keeps for each row), then
+    /// every offset written in its place, the lists allocated once at their length.
+    pub(super) fn offsets_by_subscription(&self, threads: usize, min_rows: usize) -> Vec<Vec<u64>> {
+        let rows = self.index.len();
+        let runs = threads.min(rows / min_rows.max(1)).max(1);
+        let ranges: Vec<_> = (0..runs)
+            .map(|k| rows * k / runs..rows * (k + 1) / runs)
+            .collect();
+        let subscriptions = self.meta.subscriptions.len();
+        let sub_of = |at: u64, sub: u16| match sub {
+            MANY => self.subscription_of(at),
+            sub => usize::from(sub),
+        };
+        // How many rows each subscription has in each run.
+        let counts: Vec<Vec<usize>> = on_threads(ranges.clone(), |range| {
+            let mut counts = vec![0usize; subscriptions];
+            self.index
+                .for_each_offset(range, |at, sub| counts[sub_of(at, sub)] += 1);
+            counts
+        });
+        let mut by_sub: Vec<Vec<u64>> = (0..subscriptions)
+            .map(|s| vec![0; counts.iter().map(|c| c[s]).sum()])
+            .collect();
+        // Each list cut into the runs' places, in run order.
+        let mut places: Vec<Vec<&mut [u64]>> = (0..runs).map(|_| Vec::new()).collect();
+        for (s, list) in by_sub.iter_mut().enumerate() {
+            let mut rest = list.as_mut_slice();
+            for (run, counts) in places.iter_mut().zip(&counts) {
+                let (place, after) = rest.split_at_mut(counts[s]);
+                run.push(place);
+                rest = after;
+            }
+        }
+        on_threads(
+            ranges.into_iter().zip(places).collect(),
+            |(range, mut places)| {
+                let mut filled = vec![0usize; places.len()];
+                self.index.for_each_offset(range, |at, sub| {
+                    let s = sub_of(at, sub);
+                    places[s][filled[s]] = at;
+                    filled[s] += 1;
+                });
+            },
+        );
+        by_sub
+    }
+
+    /// The subscription of the row whose message is at `at`.
+    #[inline]
+    fn subscription_of(&self, at: u64) -> usize {
+        let bytes = self.bytes.as_slice();
+        let id = at as usize + MESSAGE_HEADER_LEN;
+        self.meta
+            .subscription_at(u16::from_le_bytes([bytes[id], bytes[id + 1]]), at)
+            .expect("indexed rows have a subscription")
     }
 
     /// Every data row of every subscription, in file order.
@@ -921,6 +1006,9 @@ pub(crate) fn visit_rows<V: RowVisitor>(
 /// The threads a walk (or a gathering of columns) uses by default: every core, up to 8.
 /// Asked of the system once per process: the question reads the control groups' files,
 /// tens of microseconds a call.
+/// Fewest rows a thread is given to sort by subscription (the first [`Log::rows`]).
+const MIN_ROWS_A_THREAD: usize = 1 << 20;
+
 pub(crate) fn all_cores() -> usize {
     static CORES: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
     *CORES.get_or_init(|| {

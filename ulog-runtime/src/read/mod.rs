@@ -9,6 +9,7 @@ mod mapped;
 mod message;
 mod metadata;
 mod stream;
+mod threads;
 mod topics;
 
 pub use log::{DataRows, Log, Rows, Summary, fold_rows, fold_rows_on, summarize};
@@ -26,6 +27,7 @@ pub use metadata::{
 };
 pub(crate) use metadata::{key_name, text_of};
 pub use stream::{Event, RawMessage, StreamReader};
+pub(crate) use threads::on_threads;
 pub use topics::{InstanceRows, Skipped, TopicSummary};
 
 use crate::error::{Diagnostic, DiagnosticKind, ReadError};

@@ -887,3 +887,74 @@ fn for_each_message_shows_each_rows_time_in_the_metadata() {
         assert_eq!(latest, t, "the metadata's latest time at the row of {t}");
     }
 }
+
+/// Each subscription's row offsets as [`Log::data`] finds them, row by row.
+fn offsets_row_by_row(log: &Log<'_>) -> Vec<Vec<u64>> {
+    let mut by_sub = vec![Vec::new(); log.subscriptions().len()];
+    for row in log.data() {
+        by_sub[row.subscription.index].push(row.offset);
+    }
+    by_sub
+}
+
+#[test]
+fn rows_sorted_by_subscription_on_several_threads_are_the_rows_in_file_order() {
+    // Three topics, rows interleaved unevenly, a msg_id given to another topic halfway
+    // and one with no rows: on 1 to 7 threads (runs of 1 to 40 rows), each subscription
+    // gets its rows, in file order.
+    let mut f = File::v1(0);
+    f.format("a:uint64_t timestamp;int16_t v;uint8_t[2] _padding0;");
+    f.format("b:uint64_t timestamp;int16_t v;uint8_t[2] _padding0;");
+    f.subscribe(0, 1, "a");
+    f.subscribe(0, 2, "b");
+    f.subscribe(1, 3, "b");
+    for i in 0..40u16 {
+        f.data(1 + i % 3 / 2, &row(u64::from(i), i as i16));
+        if i == 25 {
+            f.subscribe(0, 1, "b");
+        }
+    }
+    let log = Log::from_vec(f.0).unwrap();
+    let expected = offsets_row_by_row(&log);
+    assert_eq!(expected.len(), 4);
+    assert_eq!(
+        expected.iter().map(Vec::len).collect::<Vec<_>>(),
+        [18, 13, 0, 9]
+    );
+    for threads in 1..=7 {
+        assert_eq!(
+            log.offsets_by_subscription(threads, 1),
+            expected,
+            "{threads} threads"
+        );
+    }
+    assert_eq!(values(&log, "a").len(), 18);
+}
+
+#[test]
+fn rows_of_subscriptions_numbered_past_the_index_s_two_bytes_are_found_from_their_message() {
+    // The row index keeps each row's subscription in two bytes: subscription 65,535 and
+    // later are looked up from the row's msg_id instead.
+    let mut f = File::v1(0);
+    f.format("a:uint64_t timestamp;int16_t v;uint8_t[2] _padding0;");
+    for msg_id in 0..=u16::MAX {
+        f.subscribe(0, msg_id, "a");
+    }
+    f.subscribe(1, 7, "a");
+    for (k, msg_id) in [0, 65_534, 65_535, 7, 65_535, 1].into_iter().enumerate() {
+        f.data(msg_id, &row(k as u64, 0));
+    }
+    let log = Log::from_vec(f.0).unwrap();
+    let expected = offsets_row_by_row(&log);
+    let counts = |by_sub: &[Vec<u64>]| [0, 1, 65_534, 65_535, 65_536].map(|s| by_sub[s].len());
+    assert_eq!(counts(&expected), [1, 1, 1, 2, 1]);
+    for threads in 1..=3 {
+        assert_eq!(
+            log.offsets_by_subscription(threads, 1),
+            expected,
+            "{threads} threads"
+        );
+    }
+    let last = &log.subscriptions()[65_536];
+    assert_eq!(log.rows(last).map(|r| r.timestamp).collect::<Vec<_>>(), [3]);
+}
