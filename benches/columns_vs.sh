@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# Log::open, the per-subscription row index (made by the first Log::columns), then
 # Log::columns and record_batches of every topic instance, this tree against another commit,
 # in one run: `columns_speed` built against both (the other commit checked out as a git
 # worktree under target/), run interleaved, the medians and their ratio printed.
@@ -29,9 +30,9 @@ TOML
 cp benches/src/bin/columns_speed.rs "$crate/src/main.rs"
 cargo build --quiet --release --manifest-path "$crate/Cargo.toml" --target-dir "$work/target"
 cargo build --quiet --release -p ulog-benches --bin columns_speed
-python3 - "$work/target/release/columns-speed-old" target/release/columns_speed "$log" "$runs" <<'PY'
+python3 - "$work/target/release/columns-speed-old" target/release/columns_speed "$log" "$runs" "$commit" <<'PY'
 import statistics, subprocess, sys
-old, new, log, runs = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
+old, new, log, runs, commit = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4]), sys.argv[5]
 times = {}
 for r in range(runs):
     for b in ([old, new] if r % 2 == 0 else [new, old]):
@@ -40,7 +41,7 @@ for r in range(runs):
             times.setdefault((b, what), []).append(float(secs))
 cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), "?")
 print(f"CPU: {cpu}; {runs} runs each, interleaved; log {log}")
-for what in ("columns", "batches"):
+for what in ("open", "index", "columns", "batches"):
     o, n = statistics.median(times[(old, what)]), statistics.median(times[(new, what)])
-    print(f"  {what:8} {sys.argv[1].split('/')[-1]}: {o:.3f} s   this tree: {n:.3f} s   speed-up {o / n:.2f}x")
+    print(f"  {what:8} {commit}: {o:.3f} s   this tree: {n:.3f} s   speed-up {o / n:.2f}x")
 PY

