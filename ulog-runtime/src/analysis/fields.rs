@@ -178,6 +178,18 @@ struct Acc {
     /// Per counted field: its name, offset, type and column index.
     leaves: Vec<(String, usize, Primitive, usize)>,
     stats: Vec<Stat>,
+    /// How a stage is reduced: the leaves in order, grouped where they can be.
+    plan: Vec<Reduce>,
+}
+
+/// One step of reducing a stage ([`Acc::reduce`]).
+#[derive(Debug, Clone, Copy)]
+enum Reduce {
+    /// The `i`-th leaf alone, a loop over the rows.
+    Leaf(usize),
+    /// `used` `f32` leaves side by side, the first the `first`-th: a loop over the rows,
+    /// each row's four floats from the first one vector ([`reduce_floats`]).
+    Floats { first: usize, used: usize },
 }
 
 impl Acc {
@@ -203,6 +215,7 @@ impl Acc {
             row_len: spec.row_len(),
             stage_len: stage_rows * spec.row_len(),
             stats: leaves.iter().map(|(_, _, p, _)| Stat::new(*p)).collect(),
+            plan: plan(&leaves, spec.row_len()),
             leaves,
         }
     }
@@ -388,18 +401,167 @@ impl Acc {
         let stride = self.row_len;
         let bytes = &self.stage;
         if stride > 0 && !bytes.is_empty() {
-            for ((_, at, p, _), stat) in self.leaves.iter().zip(&mut self.stats) {
-                reduce(bytes, stride, *at, *p, stat);
+            for step in &self.plan {
+                match *step {
+                    Reduce::Leaf(i) => {
+                        let (_, at, p, _) = self.leaves[i];
+                        reduce(bytes, stride, at, p, &mut self.stats[i]);
+                    }
+                    Reduce::Floats { first, used } => {
+                        let at = self.leaves[first].1;
+                        let stats = &mut self.stats[first..first + used];
+                        if !reduce_floats(bytes, stride, at, stats) {
+                            // A value that is not finite: each field looked at alone.
+                            for (k, stat) in stats.iter_mut().enumerate() {
+                                reduce(bytes, stride, at + 4 * k, Primitive::Float, stat);
+                            }
+                        }
+                    }
+                }
             }
         }
         self.stage.clear();
     }
 }
 
+/// The steps that reduce `leaves` (each `(name, offset, type, column)`, by offset) of rows
+/// of `row_len` bytes: `f32` leaves side by side, two to four at a time, in blocks of 16
+/// bytes ([`reduce_floats`]: a block may reach past them, not past the row), the others
+/// alone.
+fn plan(leaves: &[(String, usize, Primitive, usize)], row_len: usize) -> Vec<Reduce> {
+    let mut plan = Vec::new();
+    let mut i = 0;
+    while i < leaves.len() {
+        let at = leaves[i].1;
+        let side_by_side = leaves[i..]
+            .iter()
+            .take(4)
+            .enumerate()
+            .take_while(|(k, (_, a, p, _))| *p == Primitive::Float && *a == at + 4 * k)
+            .count();
+        if cfg!(target_arch = "x86_64") && side_by_side >= 2 && at + 16 <= row_len {
+            plan.push(Reduce::Floats {
+                first: i,
+                used: side_by_side,
+            });
+            i += side_by_side;
+        } else {
+            plan.push(Reduce::Leaf(i));
+            i += 1;
+        }
+    }
+    plan
+}
+
+/// Folds the first `stats.len()` (1 to 4) of the four `f32` at `at` of every row of
+/// `bytes` (`stride` bytes a row) into `stats`, a row's four one vector, two rows at a
+/// time, as long as every value taken is finite (a finite sum proves it, as in
+/// [`fold_float`]); returns false, having changed nothing, otherwise.
+#[cfg(target_arch = "x86_64")]
+fn reduce_floats(bytes: &[u8], stride: usize, at: usize, stats: &mut [Stat]) -> bool {
+    // SAFETY: SSE2 is part of every x86-64 processor (the target's baseline); the function
+    // has no other precondition.
+    #[allow(unsafe_code)]
+    unsafe {
+        reduce_floats_sse2(bytes, stride, at, stats)
+    }
+}
+
+/// [`reduce_floats`] in SSE2 instructions.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "sse2")]
+fn reduce_floats_sse2(bytes: &[u8], stride: usize, at: usize, stats: &mut [Stat]) -> bool {
+    use std::arch::x86_64::{
+        __m128, __m128d, _mm_add_pd, _mm_cvtps_pd, _mm_cvtsd_f64, _mm_cvtss_f32, _mm_max_ps,
+        _mm_min_ps, _mm_movehl_ps, _mm_set_ps, _mm_set1_ps, _mm_setzero_pd, _mm_shuffle_ps,
+        _mm_unpackhi_pd,
+    };
+    assert!(at + 16 <= stride && (1..=4).contains(&stats.len()));
+    // The four floats of a row (bounds checked once, by the block).
+    let four = |row: &[u8]| -> __m128 {
+        let b = row.first_chunk::<16>().expect("the block is in the row");
+        let f = |k: usize| f32::from_le_bytes([b[4 * k], b[4 * k + 1], b[4 * k + 2], b[4 * k + 3]]);
+        _mm_set_ps(f(3), f(2), f(1), f(0))
+    };
+    // Two rows at a time into two sets of accumulators: each addition waits on the last of
+    // its own set only. Minimum and maximum are the instructions' (a NaN would be kept or
+    // not; the finite sum rules NaNs out).
+    let (mut lo, mut hi) = (
+        [_mm_set1_ps(f32::INFINITY); 2],
+        [_mm_set1_ps(f32::NEG_INFINITY); 2],
+    );
+    let mut sums: [[__m128d; 2]; 2] = [[_mm_setzero_pd(); 2]; 2];
+    let mut take = |k: usize, v: __m128| {
+        lo[k] = _mm_min_ps(v, lo[k]);
+        hi[k] = _mm_max_ps(v, hi[k]);
+        sums[k][0] = _mm_add_pd(sums[k][0], _mm_cvtps_pd(v));
+        sums[k][1] = _mm_add_pd(sums[k][1], _mm_cvtps_pd(_mm_movehl_ps(v, v)));
+    };
+    let fields = &bytes[at..];
+    let pairs = fields.chunks_exact(2 * stride);
+    let rest = pairs.remainder();
+    let mut n = 0u64;
+    for pair in pairs {
+        let (a, b) = pair.split_at(stride);
+        take(0, four(a));
+        take(1, four(b));
+        n += 2;
+    }
+    // The rows after the pairs: one or two (the slice starts `at` bytes into the first
+    // row, so its last pair may be cut short), each chunk a row's fields.
+    for row in rest.chunks(stride) {
+        take(0, four(row));
+        n += 1;
+    }
+    let lanes = |v: __m128| -> [f32; 4] {
+        [
+            _mm_cvtss_f32(v),
+            _mm_cvtss_f32(_mm_shuffle_ps::<0b01_01_01_01>(v, v)),
+            _mm_cvtss_f32(_mm_shuffle_ps::<0b10_10_10_10>(v, v)),
+            _mm_cvtss_f32(_mm_shuffle_ps::<0b11_11_11_11>(v, v)),
+        ]
+    };
+    let halves = |s: __m128d| [_mm_cvtsd_f64(s), _mm_cvtsd_f64(_mm_unpackhi_pd(s, s))];
+    let total: Vec<f64> = (0..2)
+        .flat_map(|h| {
+            let (a, b) = (halves(sums[0][h]), halves(sums[1][h]));
+            [a[0] + b[0], a[1] + b[1]]
+        })
+        .collect();
+    if !total[..stats.len()].iter().sum::<f64>().is_finite() {
+        return false;
+    }
+    let (lo, hi) = (
+        lanes(_mm_min_ps(lo[0], lo[1])),
+        lanes(_mm_max_ps(hi[0], hi[1])),
+    );
+    for (k, stat) in stats.iter_mut().enumerate() {
+        if let Stat::Float {
+            min,
+            max,
+            sum,
+            count,
+        } = stat
+        {
+            *min = min.min(f64::from(lo[k]));
+            *max = max.max(f64::from(hi[k]));
+            *sum += total[k];
+            *count += n;
+        }
+    }
+    true
+}
+
+/// Elsewhere no step uses it ([`plan`]).
+#[cfg(not(target_arch = "x86_64"))]
+fn reduce_floats(_: &[u8], _: usize, _: usize, _: &mut [Stat]) -> bool {
+    false
+}
+
 /// Folds field `p` at `at` of every row of `bytes` (`stride` bytes a row) into `stat`.
 fn reduce(bytes: &[u8], stride: usize, at: usize, p: Primitive, stat: &mut Stat) {
     macro_rules! rows {
-        ($ty:ty, $fold:ident) => {{
+        ($ty:ty, $fold:expr) => {{
             const SIZE: usize = size_of::<$ty>();
             assert!(at + SIZE <= stride, "the field is in the row");
             // From the first row's field on: each row's field starts a chunk of `stride`.
@@ -414,18 +576,19 @@ fn reduce(bytes: &[u8], stride: usize, at: usize, p: Primitive, stat: &mut Stat)
                 let (c, d) = q.split_at(stride);
                 [value(a), value(b), value(c), value(d)]
             });
-            $fold(quads, rest, stat)
+            ($fold)(quads, rest, stat)
         }};
     }
+    // A stage is at most 4,096 rows: the sums of values of 32 bits or less fit 64 bits.
     match p {
-        Primitive::Int8 => rows!(i8, fold_signed),
-        Primitive::UInt8 => rows!(u8, fold_unsigned),
-        Primitive::Int16 => rows!(i16, fold_signed),
-        Primitive::UInt16 => rows!(u16, fold_unsigned),
-        Primitive::Int32 => rows!(i32, fold_signed),
-        Primitive::UInt32 => rows!(u32, fold_unsigned),
-        Primitive::Int64 => rows!(i64, fold_signed),
-        Primitive::UInt64 => rows!(u64, fold_unsigned),
+        Primitive::Int8 => rows!(i8, fold_signed::<_, i64>),
+        Primitive::UInt8 => rows!(u8, fold_unsigned::<_, u64>),
+        Primitive::Int16 => rows!(i16, fold_signed::<_, i64>),
+        Primitive::UInt16 => rows!(u16, fold_unsigned::<_, u64>),
+        Primitive::Int32 => rows!(i32, fold_signed::<_, i64>),
+        Primitive::UInt32 => rows!(u32, fold_unsigned::<_, u64>),
+        Primitive::Int64 => rows!(i64, fold_signed::<_, i128>),
+        Primitive::UInt64 => rows!(u64, fold_unsigned::<_, u128>),
         Primitive::Float => rows!(f32, fold_float),
         Primitive::Double => rows!(f64, fold_float),
         Primitive::Bool | Primitive::Char => {}
@@ -436,22 +599,25 @@ fn reduce(bytes: &[u8], stride: usize, at: usize, p: Primitive, stat: &mut Stat)
 #[cfg(feature = "parquet")]
 fn reduce_column(values: &ColumnValues, stat: &mut Stat) {
     macro_rules! column {
-        ($v:expr, $fold:ident) => {{
-            let quads = $v.chunks_exact(LANES);
-            let rest = quads.remainder().iter().copied();
-            let quads = quads.map(|q| std::array::from_fn(|l| q[l]));
-            $fold(quads, rest, stat)
+        ($v:expr, $fold:expr) => {{
+            // Pieces of 2^24 values: the 64-bit sums of 32-bit values do not overflow.
+            for piece in $v.chunks(1 << 24) {
+                let quads = piece.chunks_exact(LANES);
+                let rest = quads.remainder().iter().copied();
+                let quads = quads.map(|q| std::array::from_fn(|l| q[l]));
+                ($fold)(quads, rest, stat)
+            }
         }};
     }
     match values {
-        ColumnValues::Int8(v) => column!(v, fold_signed),
-        ColumnValues::UInt8(v) => column!(v, fold_unsigned),
-        ColumnValues::Int16(v) => column!(v, fold_signed),
-        ColumnValues::UInt16(v) => column!(v, fold_unsigned),
-        ColumnValues::Int32(v) => column!(v, fold_signed),
-        ColumnValues::UInt32(v) => column!(v, fold_unsigned),
-        ColumnValues::Int64(v) => column!(v, fold_signed),
-        ColumnValues::UInt64(v) => column!(v, fold_unsigned),
+        ColumnValues::Int8(v) => column!(v, fold_signed::<_, i64>),
+        ColumnValues::UInt8(v) => column!(v, fold_unsigned::<_, u64>),
+        ColumnValues::Int16(v) => column!(v, fold_signed::<_, i64>),
+        ColumnValues::UInt16(v) => column!(v, fold_unsigned::<_, u64>),
+        ColumnValues::Int32(v) => column!(v, fold_signed::<_, i64>),
+        ColumnValues::UInt32(v) => column!(v, fold_unsigned::<_, u64>),
+        ColumnValues::Int64(v) => column!(v, fold_signed::<_, i128>),
+        ColumnValues::UInt64(v) => column!(v, fold_unsigned::<_, u128>),
         ColumnValues::Float(v) => column!(v, fold_float),
         ColumnValues::Double(v) => column!(v, fold_float),
         ColumnValues::Bool(_) | ColumnValues::Char(_) | ColumnValues::Text(_) => {}
@@ -463,13 +629,18 @@ fn reduce_column(values: &ColumnValues, stat: &mut Stat) {
 const LANES: usize = 4;
 
 /// Folds signed integers (in groups of [`LANES`], then the rest) into `stat` (a `Signed`
-/// one): bounds as `i64`, the sum exact.
+/// one): bounds as `i64`, the sum exact (each lane's in `L`, which the caller chooses wide
+/// enough for its values).
 #[inline(always)]
-fn fold_signed<T: Copy + Into<i64>>(
+fn fold_signed<T, L>(
     quads: impl Iterator<Item = [T; LANES]>,
     rest: impl Iterator<Item = T>,
     stat: &mut Stat,
-) {
+) where
+    T: Copy + Into<i64>,
+    L: Copy + Default + std::ops::AddAssign + From<i64>,
+    i128: From<L>,
+{
     if let Stat::Signed {
         min,
         max,
@@ -477,18 +648,22 @@ fn fold_signed<T: Copy + Into<i64>>(
         count,
     } = stat
     {
-        fold_integers(quads, rest, (min, max, sum, count));
+        fold_integers::<T, i64, L, i128>(quads, rest, (min, max, sum, count));
     }
 }
 
 /// Folds unsigned integers into `stat` (an `Unsigned` one), as [`fold_signed`] does signed
 /// ones.
 #[inline(always)]
-fn fold_unsigned<T: Copy + Into<u64>>(
+fn fold_unsigned<T, L>(
     quads: impl Iterator<Item = [T; LANES]>,
     rest: impl Iterator<Item = T>,
     stat: &mut Stat,
-) {
+) where
+    T: Copy + Into<u64>,
+    L: Copy + Default + std::ops::AddAssign + From<u64>,
+    u128: From<L>,
+{
     if let Stat::Unsigned {
         min,
         max,
@@ -496,29 +671,30 @@ fn fold_unsigned<T: Copy + Into<u64>>(
         count,
     } = stat
     {
-        fold_integers(quads, rest, (min, max, sum, count));
+        fold_integers::<T, u64, L, u128>(quads, rest, (min, max, sum, count));
     }
 }
 
 /// Folds integers into running bounds (`B`, which every value converts into) and an exact
-/// sum (`S`, wider), and counts them.
+/// sum (`S`, wider; each lane's sum in `L`), and counts them.
 #[inline(always)]
-fn fold_integers<T, B, S>(
+fn fold_integers<T, B, L, S>(
     quads: impl Iterator<Item = [T; LANES]>,
     rest: impl Iterator<Item = T>,
     (min, max, sum, count): (&mut B, &mut B, &mut S, &mut u64),
 ) where
     T: Copy + Into<B>,
     B: Copy + Ord,
-    S: Copy + Default + std::ops::AddAssign + From<B>,
+    L: Copy + Default + std::ops::AddAssign + From<B>,
+    S: std::ops::AddAssign + From<L>,
 {
-    let (mut lo, mut hi, mut total) = ([*min; LANES], [*max; LANES], [S::default(); LANES]);
+    let (mut lo, mut hi, mut total) = ([*min; LANES], [*max; LANES], [L::default(); LANES]);
     let mut n = 0u64;
     let mut take = |l: usize, v: T| {
         let v: B = v.into();
         lo[l] = lo[l].min(v);
         hi[l] = hi[l].max(v);
-        total[l] += S::from(v);
+        total[l] += L::from(v);
     };
     for q in quads {
         for (l, v) in q.into_iter().enumerate() {
@@ -533,7 +709,7 @@ fn fold_integers<T, B, S>(
     *min = lo.into_iter().fold(*min, B::min);
     *max = hi.into_iter().fold(*max, B::max);
     for t in total {
-        *sum += t;
+        *sum += S::from(t);
     }
     *count += n;
 }

@@ -584,3 +584,111 @@ fn the_last_mode_lasts_until_the_last_status_even_when_an_older_row_ends_the_log
         ]
     );
 }
+
+#[derive(ULog)]
+struct Mixed {
+    timestamp: u64,
+    a: [f32; 3],
+    n: u32,
+    e: [f32; 5],
+    p: [f32; 2],
+    f: u64,
+    d: [i16; 6],
+    g: u8,
+}
+
+#[test]
+fn field_statistics_equal_each_fields_own_over_its_finite_values() {
+    // Floats side by side are folded four at a time (`a` with the bits of `n` beside it,
+    // NaN as a float; `e` and `p` across a field boundary), with a NaN, infinities and a
+    // negative zero among them; 64-bit integers beyond 2^40, negative 16-bit ones; more
+    // rows than a stage holds, an odd count.
+    let rows: Vec<Mixed> = (0..5_001u64)
+        .map(|i| {
+            let x = i as f32;
+            let mut m = Mixed {
+                timestamp: i,
+                a: [x.sin(), -x * 0.5, if i == 7 { -0.0 } else { x.cos() + 2.0 }],
+                n: u32::MAX - (i as u32 % 3),
+                e: [x, x * 1e-3, -x, x * x, 1.0 / (x + 1.0)],
+                p: [x - 2_500.0, 3.0],
+                f: (1 << 41) + i * 1_000_003,
+                d: [-(i as i16 % 300), 1, 2, 3, 4, i as i16 % 7],
+                g: (i % 251) as u8,
+            };
+            match i {
+                100 => m.e[1] = f32::NAN,
+                2_000 => m.e[4] = f32::INFINITY,
+                3_000 => m.p[1] = f32::NEG_INFINITY,
+                4_999 => m.a[0] = f32::NAN,
+                _ => {}
+            }
+            m
+        })
+        .collect();
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    let sub = w.topic::<Mixed>(0).unwrap();
+    for r in &rows {
+        w.write(&sub, r).unwrap();
+    }
+    let bytes = w.into_inner();
+    // Each field's finite values as f64: (name, values, exact integer sum if an integer).
+    let mut fields: Vec<(String, Vec<f64>, Option<i128>)> = Vec::new();
+    let mut float = |name: String, v: Vec<f32>| {
+        let v: Vec<f64> = v
+            .into_iter()
+            .map(f64::from)
+            .filter(|x| x.is_finite())
+            .collect();
+        fields.push((name, v, None));
+    };
+    for k in 0..3 {
+        float(format!("a[{k}]"), rows.iter().map(|r| r.a[k]).collect());
+    }
+    for k in 0..5 {
+        float(format!("e[{k}]"), rows.iter().map(|r| r.e[k]).collect());
+    }
+    for k in 0..2 {
+        float(format!("p[{k}]"), rows.iter().map(|r| r.p[k]).collect());
+    }
+    let mut int = |name: String, v: Vec<i128>| {
+        let sum = v.iter().sum();
+        fields.push((name, v.iter().map(|&x| x as f64).collect(), Some(sum)));
+    };
+    int("n".into(), rows.iter().map(|r| i128::from(r.n)).collect());
+    int("f".into(), rows.iter().map(|r| i128::from(r.f)).collect());
+    for k in 0..6 {
+        int(
+            format!("d[{k}]"),
+            rows.iter().map(|r| i128::from(r.d[k])).collect(),
+        );
+    }
+    int("g".into(), rows.iter().map(|r| i128::from(r.g)).collect());
+    let log = Log::from_vec(bytes.clone()).unwrap();
+    for (how, a) in [
+        ("two walks", Analysis::of_log(&log)),
+        ("one pass", Analysis::of_reader(&bytes[..]).unwrap()),
+    ] {
+        assert_eq!(a.field_stats.len(), fields.len(), "{how}");
+        for (name, values, sum) in &fields {
+            let s = a
+                .field_stats
+                .iter()
+                .find(|s| s.field == *name)
+                .unwrap_or_else(|| panic!("{how}: {name}"));
+            let min = values.iter().copied().fold(f64::INFINITY, f64::min);
+            let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let mean = match sum {
+                Some(sum) => *sum as f64 / values.len() as f64,
+                None => values.iter().sum::<f64>() / values.len() as f64,
+            };
+            assert_eq!(s.count, values.len() as u64, "{how}: {name}");
+            assert_eq!((s.min, s.max), (min, max), "{how}: {name}");
+            assert!(
+                (s.mean - mean).abs() <= 1e-12 * mean.abs().max(1.0),
+                "{how}: {name} mean {} against {mean}",
+                s.mean
+            );
+        }
+    }
+}
