@@ -467,12 +467,15 @@ impl Analyzer {
     pub fn event(&mut self, meta: &Metadata, event: &Event<'_>) {
         match event {
             Event::Row(row) => self.row(meta, row),
-            Event::Diagnostic(d) => {
-                if let Some(r) = d.damaged_range() {
-                    self.damaged_bytes += r.end - r.start;
-                }
-            }
+            Event::Diagnostic(d) => self.diagnostic(d),
             _ => {}
+        }
+    }
+
+    /// Takes a diagnostic of the pass (the analysis says how many bytes were damaged).
+    pub(crate) fn diagnostic(&mut self, d: &crate::Diagnostic) {
+        if let Some(r) = d.damaged_range() {
+            self.damaged_bytes += r.end - r.start;
         }
     }
 
@@ -487,29 +490,41 @@ impl Analyzer {
         // The log's end: its last row (a topic whose timestamp means something else,
         // as `mission`'s, would stretch a maximum).
         self.last_timestamp = row.timestamp;
+        // Only this much is inlined where rows are walked (most rows are of topics no
+        // analysis reads): the rest is a call, so that the walk's loop stays small.
         match self.wanted.get(i) {
-            Some(1) => return,
-            Some(2) => {}
-            _ => {
-                if self.routes.len() <= i {
-                    self.routes.resize_with(i + 1, || None);
-                    self.wanted.resize(i + 1, 0);
-                }
-                let route = self.route(row.subscription, row.schema());
-                let any = route.state.is_some()
-                    || route.fields.is_some()
-                    || route.motion.is_some()
-                    || route.sensors.is_some()
-                    || route.diagnostics.is_some()
-                    || route.steps.is_some()
-                    || route.spectra.is_some();
-                self.wanted[i] = 1 + u8::from(any);
-                self.routes[i] = Some(Box::new(route));
-                if !any {
-                    return;
-                }
-            }
+            Some(1) => {}
+            Some(2) => self.routed(i, row),
+            _ => self.first_row(i, row),
         }
+    }
+
+    /// Decides at a subscription's first row where its rows go, and takes the row there.
+    #[cold]
+    #[inline(never)]
+    fn first_row(&mut self, i: usize, row: &Row<'_>) {
+        if self.routes.len() <= i {
+            self.routes.resize_with(i + 1, || None);
+            self.wanted.resize(i + 1, 0);
+        }
+        let route = self.route(row.subscription, row.schema());
+        let any = route.state.is_some()
+            || route.fields.is_some()
+            || route.motion.is_some()
+            || route.sensors.is_some()
+            || route.diagnostics.is_some()
+            || route.steps.is_some()
+            || route.spectra.is_some();
+        self.wanted[i] = 1 + u8::from(any);
+        self.routes[i] = Some(Box::new(route));
+        if any {
+            self.routed(i, row);
+        }
+    }
+
+    /// Takes a row of subscription `i` into each analysis its route names.
+    #[inline(never)]
+    fn routed(&mut self, i: usize, row: &Row<'_>) {
         let route = self.routes[i].as_deref().expect("made with its byte");
         let t = row.timestamp;
         if let Some(f) = &route.state {
@@ -698,9 +713,7 @@ impl Analysis {
             (summary, analyzer)
         };
         for d in &summary.diagnostics {
-            if let Some(r) = d.damaged_range() {
-                analyzer.damaged_bytes += r.end - r.start;
-            }
+            analyzer.diagnostic(d);
         }
         Ok(analyzer.finish(&summary.metadata))
     }

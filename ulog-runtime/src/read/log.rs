@@ -1008,12 +1008,12 @@ pub(crate) fn visit_rows<V: RowVisitor>(
     Ok((summary, visitor))
 }
 
-/// The threads a walk (or a gathering of columns) uses by default: every core, up to 8.
-/// Asked of the system once per process: the question reads the control groups' files,
-/// tens of microseconds a call.
 /// Fewest rows a thread is given to sort by subscription (the first [`Log::rows`]).
 const MIN_ROWS_A_THREAD: usize = 1 << 20;
 
+/// The threads a walk (or a gathering of columns) uses by default: every core, up to 8.
+/// Asked of the system once per process: the question reads the control groups' files,
+/// tens of microseconds a call.
 pub(crate) fn all_cores() -> usize {
     static CORES: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
     *CORES.get_or_init(|| {

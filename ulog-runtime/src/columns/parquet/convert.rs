@@ -376,7 +376,7 @@ impl<R> Hashing<'_, R> {
     }
 }
 
-/// `by_msg_id` entries: not yet seen, or left out.
+/// `by_sub` entries: not yet seen, or left out.
 const UNSEEN: u32 = 0;
 const LEFT_OUT: u32 = u32::MAX;
 
@@ -495,8 +495,9 @@ struct Pass<'c> {
     log_dir: String,
     names: FileNames,
     notes: Vec<String>,
-    /// Per `msg_id`: (summary index + 1, instance index + 1), or [`UNSEEN`]/[`LEFT_OUT`].
-    by_msg_id: Vec<(u32, u32)>,
+    /// Per subscription (by index): (summary index + 1, instance index + 1), or
+    /// [`UNSEEN`]/[`LEFT_OUT`].
+    by_sub: Vec<(u32, u32)>,
     summaries: Vec<Summary>,
     instances: Vec<Instance>,
     logged: Vec<LoggedMessage>,
@@ -530,7 +531,7 @@ impl<'c> Pass<'c> {
             log_dir: options.layout.log_dir(stem, 1),
             names: FileNames::new(),
             notes: Vec::new(),
-            by_msg_id: vec![(UNSEEN, UNSEEN); 1 << 16],
+            by_sub: Vec::new(),
             summaries: Vec::new(),
             instances: Vec::new(),
             logged: Vec::new(),
@@ -559,36 +560,46 @@ impl<'c> Pass<'c> {
         if self.failure.is_some() || self.stopped {
             return;
         }
-        if let Some(a) = &mut self.analyzer {
-            a.event(meta, event);
-        }
         match event {
-            Event::Row(row) => self.row(row),
-            // A msg_id given to another subscription: its rows go where that one says.
-            Event::Subscription(sub) => self.by_msg_id[usize::from(sub.msg_id)] = (UNSEEN, UNSEEN),
+            Event::Row(row) => self.take_row(meta, row),
             Event::Logged(m) => self.logged.push(m.clone()),
             Event::ParameterChange(c) => self.changes.push(c.clone()),
             Event::Dropout(d) => self.dropouts.push(*d),
-            Event::Diagnostic(d) => {
-                self.skipped.add(d);
-                if self.diagnostics.len() < KEPT_DIAGNOSTICS {
-                    self.diagnostics.push((**d).clone());
-                } else {
-                    self.diagnostics_omitted += 1;
-                }
-            }
-            Event::Definition { .. } | Event::Sync { .. } => {}
+            Event::Diagnostic(d) => self.diagnostic(d),
+            Event::Subscription(_) | Event::Definition { .. } | Event::Sync { .. } => {}
+        }
+    }
+
+    /// A row, to the analysis and its table.
+    #[inline]
+    fn take_row(&mut self, meta: &crate::read::Metadata, row: &Row<'_>) {
+        if self.failure.is_some() || self.stopped {
+            return;
+        }
+        if let Some(a) = &mut self.analyzer {
+            a.row(meta, row);
+        }
+        self.row(row);
+    }
+
+    fn diagnostic(&mut self, d: &Diagnostic) {
+        if let Some(a) = &mut self.analyzer {
+            a.diagnostic(d);
+        }
+        self.skipped.add(d);
+        if self.diagnostics.len() < KEPT_DIAGNOSTICS {
+            self.diagnostics.push(d.clone());
+        } else {
+            self.diagnostics_omitted += 1;
         }
     }
 
     #[inline]
     fn row(&mut self, row: &Row<'_>) {
-        let msg_id = usize::from(row.subscription.msg_id);
-        let (mut s, mut i) = self.by_msg_id[msg_id];
-        if s == UNSEEN {
-            (s, i) = self.first_row(row);
-            self.by_msg_id[msg_id] = (s, i);
-        }
+        let (s, i) = match self.by_sub.get(row.subscription.index()) {
+            Some(&(s, i)) if s != UNSEEN => (s, i),
+            _ => self.first_row(row),
+        };
         let summary = &mut self.summaries[s as usize - 1];
         let t = &mut summary.topic;
         t.rows += 1;
@@ -614,6 +625,7 @@ impl<'c> Pass<'c> {
     }
 
     /// Hands instance `k`'s batch to the encoder.
+    #[inline(never)]
     fn send(&mut self, k: usize) {
         let inst = &mut self.instances[k];
         if inst.batch.rows() == 0 {
@@ -649,8 +661,22 @@ impl<'c> Pass<'c> {
         }
     }
 
-    /// Where the rows of a `msg_id` go, decided at its first row (after each subscription).
+    /// Where the rows of a subscription go, decided at its first row.
+    #[cold]
+    #[inline(never)]
     fn first_row(&mut self, row: &Row<'_>) -> (u32, u32) {
+        let place = self.place(row);
+        let sub = row.subscription.index();
+        if self.by_sub.len() <= sub {
+            self.by_sub.resize(sub + 1, (UNSEEN, UNSEEN));
+        }
+        self.by_sub[sub] = place;
+        place
+    }
+
+    /// Where the rows of `row`'s subscription go: its summary and its instance (new ones
+    /// made for it).
+    fn place(&mut self, row: &Row<'_>) -> (u32, u32) {
         let sub = row.subscription;
         let s = match self
             .summaries

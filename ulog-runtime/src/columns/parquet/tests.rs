@@ -281,22 +281,145 @@ fn rows_of_a_reused_msg_id_go_to_the_topic_subscribed_last() {
         data: &[3, 0, 0, 0, 0, 0, 0, 0, 7, 0, 8, 0],
     });
     let root = temp("reuse");
-    let conv = Converter::new(&root, ParquetOptions::default())
-        .convert_reader(&bytes[..], "r.ulg")
-        .unwrap();
-    let rows: Vec<(&str, usize)> = conv
-        .files
-        .iter()
-        .map(|f| (f.topic.as_str(), f.rows))
-        .collect();
-    assert_eq!(rows, [("a", 1), ("b", 2)]);
-    let (batches, _, _) = read(&conv.files[1].path);
-    let z: Vec<u16> = column::<arrow_array::UInt16Array>(&batches, "z")
-        .iter()
-        .flat_map(|a| a.values().iter().copied())
-        .collect();
-    assert_eq!(z, [6, 8]);
+    for (how, conv) in both_ways(&bytes, "r.ulg", &root, ParquetOptions::default()) {
+        let conv = conv.unwrap();
+        let rows: Vec<(&str, usize)> = conv
+            .files
+            .iter()
+            .map(|f| (f.topic.as_str(), f.rows))
+            .collect();
+        assert_eq!(rows, [("a", 1), ("b", 2)], "{how}");
+        let (batches, _, _) = read(&conv.files[1].path);
+        let z: Vec<u16> = column::<arrow_array::UInt16Array>(&batches, "z")
+            .iter()
+            .flat_map(|a| a.values().iter().copied())
+            .collect();
+        assert_eq!(z, [6, 8], "{how}");
+    }
     std::fs::remove_dir_all(&root).unwrap();
+}
+
+/// `bytes` converted as a stream ([`Converter::convert_reader`]) and as a file named
+/// `name` ([`Converter::convert_file`], which maps it), each into a folder of its own
+/// under `dir`.
+fn both_ways(
+    bytes: &[u8],
+    name: &str,
+    dir: &Path,
+    options: ParquetOptions,
+) -> [(&'static str, Result<Conversion, ConvertError>); 2] {
+    std::fs::create_dir_all(dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, bytes).unwrap();
+    let stream = Converter::new(dir.join("stream"), options.clone()).convert_reader(bytes, name);
+    let file = Converter::new(dir.join("file"), options).convert_file(&path);
+    [("stream", stream), ("file", file)]
+}
+
+#[test]
+fn a_file_converts_as_its_bytes_read_as_a_stream() {
+    use crate::read::{LogLevel, ParamValue};
+    // More than a progress step (8 MB) and many reads (logged strings of 60 kB among the rows), with
+    // a parameter change, a dropout, junk in the middle and a message cut short at the end.
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    w.info("sys_name", &crate::Value::String("PX4".to_owned()))
+        .unwrap();
+    let b0 = w.topic::<Battery>(0).unwrap();
+    let b1 = w.topic::<Battery>(1).unwrap();
+    let long = "x".repeat(60_000);
+    for t in 0..20_000u64 {
+        let v = Battery {
+            timestamp: t,
+            voltage_v: t as f32 / 8.0,
+            cells: [1, 2, t as u16],
+        };
+        w.write(&b0, &v).unwrap();
+        if t % 2 == 0 {
+            w.write(&b1, &v).unwrap();
+        }
+        if t % 130 == 0 {
+            w.log(LogLevel::Info, t, &format!("{t} {long}")).unwrap();
+        }
+        if t == 5_000 {
+            w.parameter("P", ParamValue::Int32(3)).unwrap();
+            w.dropout(20).unwrap();
+            w.log(LogLevel::Warning, t, "junk before this").unwrap();
+        }
+    }
+    let mut bytes = w.into_inner();
+    // The logged string's message starts 12 bytes before its text (size, type, level,
+    // timestamp).
+    let text = bytes
+        .windows(16)
+        .position(|w| w == b"junk before this")
+        .unwrap();
+    bytes.splice(text - 12..text - 12, [0xAB; 1_000]);
+    bytes.truncate(bytes.len() - 5);
+    assert!(bytes.len() > 9 << 20);
+    let dir = temp("file-or-stream");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("f.ulg");
+    std::fs::write(&path, &bytes).unwrap();
+    let stream = Converter::new(dir.join("stream"), ParquetOptions::default())
+        .convert_reader(&bytes[..], "f.ulg")
+        .unwrap();
+    assert!(
+        stream.skipped.damaged_bytes >= 1_000,
+        "{:?}",
+        stream.skipped
+    );
+    let tables = |conv: &Conversion, root: &Path| {
+        conv.files
+            .iter()
+            .map(|f| {
+                let (batches, kv, _) = read(&f.path);
+                let at = f.path.strip_prefix(root).unwrap().to_owned();
+                (at, f.topic.clone(), f.multi_id, f.rows, batches, kv)
+            })
+            .collect::<Vec<_>>()
+    };
+    let json = |conv: &Conversion| -> serde_json::Value {
+        serde_json::from_slice(&std::fs::read(&conv.metadata).unwrap()).unwrap()
+    };
+    let sha: String = sha2::Sha256::digest(&bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    assert_eq!(json(&stream)["log"]["sha256"], sha.as_str());
+    // Hashed as read (one encoder or none) or on a thread of its own (two).
+    for encoders in [Some(0), Some(1), Some(2)] {
+        let progress = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(0));
+        let seen = progress.clone();
+        let root = dir.join(format!("file-{encoders:?}"));
+        let file = Converter::new(
+            &root,
+            ParquetOptions {
+                encoders,
+                ..ParquetOptions::default()
+            },
+        )
+        .on_progress(move |n| {
+            seen.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
+        })
+        .convert_file(&path)
+        .unwrap();
+        assert_eq!(
+            progress.load(std::sync::atomic::Ordering::Relaxed),
+            bytes.len() as u64,
+            "{encoders:?}: progress of every byte"
+        );
+        assert_eq!(
+            (file.bytes, &file.skipped),
+            (stream.bytes, &stream.skipped),
+            "{encoders:?}"
+        );
+        assert!(
+            tables(&file, &root) == tables(&stream, &dir.join("stream")),
+            "{encoders:?}: the tables"
+        );
+        assert_eq!(json(&file), json(&stream), "{encoders:?}: metadata.json");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
