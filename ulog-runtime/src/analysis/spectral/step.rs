@@ -53,8 +53,9 @@ struct State {
     rlen: usize,
     shift: usize,
     since: usize,
-    /// The last `flen` samples of the setpoint and the rate: rings, `next` the oldest once
-    /// full.
+    /// The last `flen` samples of the setpoint and the rate: rings of `2 × flen`, each
+    /// sample written at `next` and `next + flen`, so that the last `flen` samples, oldest
+    /// first, are always the slice `[next, next + flen)` (`next` the oldest once full).
     u: Vec<f64>,
     y: Vec<f64>,
     next: usize,
@@ -77,8 +78,10 @@ struct State {
 
 #[derive(Debug, Clone)]
 struct Histogram {
-    /// `rlen × AMPLITUDES`, time-major.
+    /// `AMPLITUDES × rlen`, amplitude-major: a step's next point is most often in the
+    /// same amplitude bin or one near it, so its count is near the last one's in memory.
     counts: Vec<f32>,
+    rlen: usize,
     windows: usize,
 }
 
@@ -170,8 +173,8 @@ impl State {
             rlen,
             shift: (flen / SUPERPOSITION).max(1),
             since: 0,
-            u: vec![0.0; flen],
-            y: vec![0.0; flen],
+            u: vec![0.0; 2 * flen],
+            y: vec![0.0; 2 * flen],
             next: 0,
             filled: 0,
             above_low: 0,
@@ -202,8 +205,9 @@ impl State {
             self.above_low -= usize::from(self.u[self.next].abs() > LOW);
         }
         self.above_low += usize::from(u.abs() > LOW);
-        self.u[self.next] = u;
-        self.y[self.next] = y;
+        let (a, b) = (self.next, self.next + self.flen);
+        (self.u[a], self.u[b]) = (u, u);
+        (self.y[a], self.y[b]) = (y, y);
         self.next = if self.next + 1 == self.flen {
             0
         } else {
@@ -217,10 +221,9 @@ impl State {
         }
     }
 
-    /// The `k`-th of the last `flen` samples of a ring, oldest first.
-    fn oldest_first<'r>(&self, ring: &'r [f64]) -> impl Iterator<Item = f64> + 'r {
-        let (newer, older) = ring.split_at(self.next);
-        older.iter().chain(newer).copied()
+    /// The last `flen` samples of a ring, oldest first.
+    fn oldest_first<'r>(&self, ring: &'r [f64]) -> &'r [f64] {
+        &ring[self.next..self.next + self.flen]
     }
 
     fn window_step(&mut self) {
@@ -229,6 +232,7 @@ impl State {
         }
         let peak = self
             .oldest_first(&self.u)
+            .iter()
             .zip(&self.window)
             .map(|(u, w)| (u * w).abs())
             .fold(0.0, f64::max);
@@ -238,10 +242,11 @@ impl State {
         let len = self.fft.len();
         let samples = self
             .oldest_first(&self.u)
+            .iter()
             .zip(self.oldest_first(&self.y))
             .zip(&self.window);
-        for (k, ((u, y), w)) in samples.enumerate() {
-            self.both[k] = Complex::new(u * w, y * w);
+        for (z, ((u, y), w)) in self.both.iter_mut().zip(samples) {
+            *z = Complex::new(u * w, y * w);
         }
         for z in &mut self.both[self.flen..len] {
             *z = Complex::default();
@@ -278,6 +283,7 @@ impl Histogram {
     fn new(rlen: usize) -> Histogram {
         Histogram {
             counts: vec![0.0; rlen * AMPLITUDES],
+            rlen,
             windows: 0,
         }
     }
@@ -286,7 +292,7 @@ impl Histogram {
         let x = (value - AMPLITUDE_MIN) / (AMPLITUDE_MAX - AMPLITUDE_MIN) * AMPLITUDES as f64;
         if (0.0..=AMPLITUDES as f64).contains(&x) {
             let bin = (x as usize).min(AMPLITUDES - 1);
-            self.counts[n * AMPLITUDES + bin] += 1.0;
+            self.counts[bin * self.rlen + n] += 1.0;
         }
     }
 
@@ -301,12 +307,11 @@ impl Histogram {
                 AMPLITUDE_MIN + (AMPLITUDE_MAX - AMPLITUDE_MIN) * j as f64 / (AMPLITUDES - 1) as f64
             })
             .collect();
-        let rlen = self.counts.len() / AMPLITUDES;
+        let rlen = self.rlen;
         let avr = (0..rlen)
             .map(|n| {
-                let column: Vec<f64> = self.counts[n * AMPLITUDES..(n + 1) * AMPLITUDES]
-                    .iter()
-                    .map(|&c| f64::from(c))
+                let column: Vec<f64> = (0..AMPLITUDES)
+                    .map(|bin| f64::from(self.counts[bin * rlen + n]))
                     .collect();
                 let smooth = convolve_constant(&column, &kernel);
                 let max = smooth.iter().copied().fold(0.0, f64::max);
