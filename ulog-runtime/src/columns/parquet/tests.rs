@@ -27,6 +27,11 @@ struct Gyro {
 
 /// A log of `rows` battery rows on two instances, and a topic with a `/` in its name.
 fn log_bytes(rows: u64) -> Vec<u8> {
+    log_bytes_with(rows, |_, _| {})
+}
+
+/// [`log_bytes`], `more` writing what else it wants after the rows of each time `t`.
+fn log_bytes_with(rows: u64, mut more: impl FnMut(&mut Writer<Vec<u8>>, u64)) -> Vec<u8> {
     let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
     let text = |s: &str| crate::Value::String(s.to_owned());
     w.info("sys_name", &text("PX4")).unwrap();
@@ -44,6 +49,7 @@ fn log_bytes(rows: u64) -> Vec<u8> {
         if t % 2 == 0 {
             w.write(&b1, &v).unwrap();
         }
+        more(&mut w, t);
     }
     w.write(&gyro, &Gyro { timestamp: 5, x: 7 }).unwrap();
     w.into_inner()
@@ -319,24 +325,11 @@ fn both_ways(
 #[test]
 fn a_file_converts_as_its_bytes_read_as_a_stream() {
     use crate::read::{LogLevel, ParamValue};
-    // More than a progress step (8 MB) and many reads (logged strings of 60 kB among the rows), with
-    // a parameter change, a dropout, junk in the middle and a message cut short at the end.
-    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
-    w.info("sys_name", &crate::Value::String("PX4".to_owned()))
-        .unwrap();
-    let b0 = w.topic::<Battery>(0).unwrap();
-    let b1 = w.topic::<Battery>(1).unwrap();
+    // More than a progress step (8 MB) and many reads (logged strings of 60 kB among the
+    // rows), with a parameter change, a dropout, junk in the middle and a message cut short
+    // at the end.
     let long = "x".repeat(60_000);
-    for t in 0..20_000u64 {
-        let v = Battery {
-            timestamp: t,
-            voltage_v: t as f32 / 8.0,
-            cells: [1, 2, t as u16],
-        };
-        w.write(&b0, &v).unwrap();
-        if t % 2 == 0 {
-            w.write(&b1, &v).unwrap();
-        }
+    let mut bytes = log_bytes_with(20_000, |w, t| {
         if t % 130 == 0 {
             w.log(LogLevel::Info, t, &format!("{t} {long}")).unwrap();
         }
@@ -345,8 +338,7 @@ fn a_file_converts_as_its_bytes_read_as_a_stream() {
             w.dropout(20).unwrap();
             w.log(LogLevel::Warning, t, "junk before this").unwrap();
         }
-    }
-    let mut bytes = w.into_inner();
+    });
     // The logged string's message starts 12 bytes before its text (size, type, level,
     // timestamp).
     let text = bytes
