@@ -522,12 +522,11 @@ fn reduce_floats_sse2(bytes: &[u8], stride: usize, at: usize, stats: &mut [Stat]
         ]
     };
     let halves = |s: __m128d| [_mm_cvtsd_f64(s), _mm_cvtsd_f64(_mm_unpackhi_pd(s, s))];
-    let total: Vec<f64> = (0..2)
-        .flat_map(|h| {
-            let (a, b) = (halves(sums[0][h]), halves(sums[1][h]));
-            [a[0] + b[0], a[1] + b[1]]
-        })
-        .collect();
+    // Each lane's sum, the two sets of accumulators added.
+    let total: [f64; 4] = std::array::from_fn(|k| {
+        let (a, b) = (halves(sums[0][k / 2]), halves(sums[1][k / 2]));
+        a[k % 2] + b[k % 2]
+    });
     if !total[..stats.len()].iter().sum::<f64>().is_finite() {
         return false;
     }

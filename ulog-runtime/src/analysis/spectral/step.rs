@@ -81,7 +81,6 @@ struct Histogram {
     /// `AMPLITUDES × rlen`, amplitude-major: a step's next point is most often in the
     /// same amplitude bin or one near it, so its count is near the last one's in memory.
     counts: Vec<f32>,
-    rlen: usize,
     windows: usize,
 }
 
@@ -283,7 +282,6 @@ impl Histogram {
     fn new(rlen: usize) -> Histogram {
         Histogram {
             counts: vec![0.0; rlen * AMPLITUDES],
-            rlen,
             windows: 0,
         }
     }
@@ -292,8 +290,14 @@ impl Histogram {
         let x = (value - AMPLITUDE_MIN) / (AMPLITUDE_MAX - AMPLITUDE_MIN) * AMPLITUDES as f64;
         if (0.0..=AMPLITUDES as f64).contains(&x) {
             let bin = (x as usize).min(AMPLITUDES - 1);
-            self.counts[bin * self.rlen + n] += 1.0;
+            let at = bin * self.rlen() + n;
+            self.counts[at] += 1.0;
         }
+    }
+
+    /// Points of the response (the counts' time axis).
+    fn rlen(&self) -> usize {
+        self.counts.len() / AMPLITUDES
     }
 
     /// The mode-seeking average over time, if enough windows counted.
@@ -307,7 +311,7 @@ impl Histogram {
                 AMPLITUDE_MIN + (AMPLITUDE_MAX - AMPLITUDE_MIN) * j as f64 / (AMPLITUDES - 1) as f64
             })
             .collect();
-        let rlen = self.rlen;
+        let rlen = self.rlen();
         let avr = (0..rlen)
             .map(|n| {
                 let column: Vec<f64> = (0..AMPLITUDES)

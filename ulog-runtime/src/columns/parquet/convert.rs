@@ -573,9 +573,6 @@ impl<'c> Pass<'c> {
     /// A row, to the analysis and its table.
     #[inline]
     fn take_row(&mut self, meta: &crate::read::Metadata, row: &Row<'_>) {
-        if self.failure.is_some() || self.stopped {
-            return;
-        }
         if let Some(a) = &mut self.analyzer {
             a.row(meta, row);
         }
