@@ -35,7 +35,7 @@ impl Figures {
                 T::Int32 => f64::from(i32::parse(b)),
                 T::UInt32 => f64::from(u32::parse(b)),
                 T::Int64 => i64::parse(b) as f64,
-                T::UInt64 => u64::parse(b) as f64,
+                T::UInt64 => examples::u64_to_f64(u64::parse(b)),
                 T::Float => f64::from(f32::parse(b)),
                 T::Double => f64::parse(b),
                 T::Bool => f64::from(u8::from(bool::parse(b))),
