@@ -174,3 +174,29 @@ fn scan_figures_equal_pyulogs() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
     eprintln!("{compared} files: scan figures equal pyulog's");
 }
+
+/// The scans' conversion of `uint64_t` leaves (`examples::u64_to_f64`, through `i64` below
+/// 2^63) gives what `as f64` gives, at the edges of its fast path and of `f64`'s exact
+/// integers.
+#[test]
+fn unsigned_64_bit_leaves_convert_as_the_language_converts_them() {
+    for x in [
+        0,
+        1,
+        (1u64 << 53) - 1,
+        1 << 53,
+        (1 << 53) + 1,
+        (1 << 63) - 1,
+        1 << 63,
+        (1 << 63) + 1,
+        (1 << 63) + 1025,
+        u64::MAX - 1024,
+        u64::MAX,
+    ] {
+        assert_eq!(
+            examples::u64_to_f64(x).to_bits(),
+            (x as f64).to_bits(),
+            "{x}"
+        );
+    }
+}
