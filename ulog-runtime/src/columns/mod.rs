@@ -668,25 +668,23 @@ impl RowBatch {
     }
 
     /// The rows' columns, in the spec's order.
-    pub fn columns(mut self) -> Columns {
+    pub fn columns(self) -> Columns {
         let rows = self.rows();
         let mut values = empty_columns(&self.spec, rows);
+        // A block of rows at a time, in place, so that each column's loop reads rows the
+        // one before brought into cache.
         let stage_rows = (STAGE_BYTES / self.spec.row_len.max(1)).max(1);
-        if rows <= stage_rows {
-            self.append_to(&mut values);
-        } else {
-            // A block at a time, so that each column's loop reads rows still in cache.
-            let mut block = RowBatch::with_capacity(self.spec.clone(), 0);
-            let stride = self.spec.row_len;
-            for (bytes, timestamps) in self
-                .bytes
-                .chunks(stage_rows * stride.max(1))
-                .zip(self.timestamps.chunks(stage_rows))
-            {
-                block.bytes.extend_from_slice(bytes);
-                block.timestamps.extend_from_slice(timestamps);
-                block.append_to(&mut values);
-            }
+        // A spec without value columns reads no bytes: its rows are empty.
+        let stride = self.spec.row_len;
+        for (i, timestamps) in self.timestamps.chunks(stage_rows).enumerate() {
+            let start = i * stage_rows * stride;
+            let bytes = &self.bytes[start..start + timestamps.len() * stride];
+            append(
+                &self.spec,
+                bytes.chunks_exact(stride.max(1)),
+                timestamps,
+                &mut values,
+            );
         }
         Columns {
             spec: self.spec,

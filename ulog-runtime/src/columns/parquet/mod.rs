@@ -134,7 +134,7 @@ impl ParquetOptions {
     ) -> parquet::file::properties::WriterPropertiesBuilder {
         WriterProperties::builder()
             .set_dictionary_enabled(self.dictionary)
-            .set_data_page_size_limit(64 << 10)
+            .set_data_page_size_limit(1 << 20)
             .set_statistics_enabled(if self.page_statistics {
                 EnabledStatistics::Page
             } else {
