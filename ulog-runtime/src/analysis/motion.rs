@@ -332,9 +332,15 @@ impl Steps {
         } else {
             &mut self.steps
         };
+        if !keep {
+            for s in steps {
+                s.skip(t);
+            }
+            return;
+        }
         for (k, leaf) in xyz.iter().enumerate() {
             if let Some(v) = leaf.f64(data) {
-                steps[k].gyro(t, v.to_degrees(), keep);
+                steps[k].gyro(t, v.to_degrees(), true);
             }
         }
     }
@@ -388,8 +394,10 @@ impl Spectra {
         // (from then on it would not be used).
         let feed = |welch: &mut [Welch; 3], xyz: &[Leaf; 3]| {
             for (w, leaf) in welch.iter_mut().zip(xyz) {
-                if let Some(v) = leaf.f64(data) {
-                    w.push(t, v, keep);
+                if !keep {
+                    w.skip(t);
+                } else if let Some(v) = leaf.f64(data) {
+                    w.push(t, v, true);
                 }
             }
         };

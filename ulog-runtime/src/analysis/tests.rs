@@ -110,6 +110,8 @@ pub(crate) struct Faults {
     pub(crate) motor: bool,
     pub(crate) rc: bool,
     pub(crate) steps: bool,
+    /// Roll rates of 1000 deg/s out of flight (a vehicle turned by hand on the ground).
+    pub(crate) ground_spin: bool,
 }
 
 const S: u64 = 1_000_000;
@@ -318,11 +320,16 @@ pub(crate) fn flight(faults: Faults) -> Vec<u8> {
         )
         .unwrap();
         roll += (step - roll) * (1.0 - (-0.005f64 / 0.02).exp());
+        let measured = if faults.ground_spin && !in_air(t) {
+            1000f64
+        } else {
+            roll
+        };
         w.write(
             &rates,
             &VehicleAngularVelocity {
                 timestamp: t,
-                xyz: [roll.to_radians() as f32, 0.0, 0.0],
+                xyz: [measured.to_radians() as f32, 0.0, 0.0],
             },
         )
         .unwrap();
@@ -523,6 +530,28 @@ fn roll_steps_give_the_loops_step_response() {
         a.step_response.iter().all(|r| r.axis == "roll"),
         "the other axes did not move"
     );
+}
+
+/// The step response and the spectra take only samples in flight: rates of 1000 deg/s on
+/// the ground, up to the takeoff's sample, change neither (a run starts at its first sample
+/// in flight, not at the last one before it).
+#[test]
+fn rates_out_of_flight_change_no_step_response_or_spectrum() {
+    let calm = analysis(Faults {
+        steps: true,
+        ..Faults::default()
+    });
+    let spun = analysis(Faults {
+        steps: true,
+        ground_spin: true,
+        ..Faults::default()
+    });
+    assert!(!calm.step_response.is_empty() && !calm.spectra.is_empty());
+    assert_eq!(calm.step_response, spun.step_response);
+    assert_eq!(calm.spectra, spun.spectra);
+    // The spin is in the log: the rotation rate over the whole log has it.
+    let deg_s = |a: &Analysis| a.stats.all.max_rotation_speed_deg_s.unwrap();
+    assert!(deg_s(&spun) > 999.0 && deg_s(&calm) < 200.0);
 }
 
 #[test]

@@ -62,6 +62,24 @@ impl Welch {
         self.take(t, x, keep);
     }
 
+    /// A sample at `t` out of flight, its value not read: the same as [`Welch::push`] with
+    /// `keep` false (the value of a sample out of flight is never used).
+    #[inline]
+    pub(crate) fn skip(&mut self, t: u64) {
+        match &mut self.state {
+            Some(s) => {
+                if s.segments >= MAX_SEGMENTS {
+                    return;
+                }
+                s.run.clear();
+                self.last = Some(t);
+            }
+            None => {
+                self.start(t, f64::NAN, false);
+            }
+        }
+    }
+
     /// Before the rate is known: keeps the sample, until its time gives the rate, then
     /// takes the samples kept. Returns whether the state is made.
     #[cold]
@@ -185,6 +203,27 @@ mod tests {
             w.push(t, (i % 5) as f64, true);
         }
         assert!(w.finish().is_none());
+    }
+
+    /// A sample skipped out of flight is one pushed with `keep` false, whatever its value,
+    /// before the rate is known (the first 64 intervals) and after: the same estimate.
+    #[test]
+    fn a_skipped_sample_is_a_sample_pushed_out_of_flight() {
+        let (mut pushed, mut skipped) = (Welch::default(), Welch::default());
+        for i in 0..30_000u64 {
+            // In flight but for the first 40 samples and two stretches later.
+            let keep = i >= 40 && !(5_000..5_300).contains(&i) && !(12_000..12_010).contains(&i);
+            let x = ((i * 37) % 101) as f64;
+            pushed.push(i * 2_000, x, keep);
+            if keep {
+                skipped.push(i * 2_000, x, true);
+            } else {
+                skipped.skip(i * 2_000);
+            }
+        }
+        let (a, b) = (pushed.finish().unwrap(), skipped.finish().unwrap());
+        assert!(a.segments > 50, "{}", a.segments);
+        assert_eq!(a, b);
     }
 
     #[test]

@@ -133,6 +133,20 @@ impl StepResponse {
         }
     }
 
+    /// A measured rate sample at `t` µs out of flight: it ends the current run, and the
+    /// next run starts at its first sample in flight (the value is not needed: it is read
+    /// only in flight).
+    #[inline]
+    pub(crate) fn skip(&mut self, t: u64) {
+        if self.interval.see(t).is_none() {
+            return;
+        }
+        self.last = None;
+        if let Some(state) = &mut self.state {
+            state.reset(t);
+        }
+    }
+
     /// Whether enough windows counted: [`StepResponse::finish`] gives a response.
     pub(crate) fn has_response(&self) -> bool {
         self.state
@@ -453,6 +467,28 @@ mod tests {
             s.gyro((t * 1e6) as u64, y, true);
         }
         s.finish().unwrap()
+    }
+
+    /// After samples out of flight, a run's grid starts at its first sample in flight: 200
+    /// Hz, 1 s windows every 12 samples, so `200 + 10 × 12 - 1` samples in flight make 10
+    /// windows (11 had the last sample before takeoff started the run).
+    #[test]
+    fn a_run_after_skipped_samples_starts_at_its_first_sample_in_flight() {
+        let windows = |in_flight: u64| {
+            let mut s = StepResponse::default();
+            s.setpoint(100.0);
+            let dt = 5_000;
+            for i in 0..300 {
+                s.skip(i * dt);
+            }
+            for i in 300..300 + in_flight {
+                s.gyro(i * dt, 90.0 + (i % 7) as f64, true);
+            }
+            s.finish().and_then(|r| r.low).map(|(n, _)| n)
+        };
+        assert_eq!(windows(200 + 10 * 12 - 1), Some(10));
+        assert_eq!(windows(200 + 10 * 12), Some(11));
+        assert_eq!(windows(200 + 9 * 12 - 1), None, "9 windows are too few");
     }
 
     #[test]
