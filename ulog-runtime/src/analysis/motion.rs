@@ -264,7 +264,12 @@ pub(super) enum SpectralFields {
 }
 
 impl SpectralFields {
+    /// The fields, if numbers (a sample out of flight is skipped unread: a field that is not
+    /// a number, text in a crafted log, would never be read at all).
     pub(super) fn bind(topic: &str, index: &FieldIndex) -> Option<SpectralFields> {
+        let three = |index: &FieldIndex, names: [&str; 3]| {
+            three(index, names).filter(|l| l.iter().all(|l| matches!(l, Leaf::Value(..))))
+        };
         let xyz = || three(index, ["xyz[0]", "xyz[1]", "xyz[2]"]);
         match topic {
             "vehicle_rates_setpoint" => Some(SpectralFields::Setpoint(three(

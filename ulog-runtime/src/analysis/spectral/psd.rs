@@ -62,22 +62,11 @@ impl Welch {
         self.take(t, x, keep);
     }
 
-    /// A sample at `t` out of flight, its value not read: the same as [`Welch::push`] with
-    /// `keep` false (the value of a sample out of flight is never used).
+    /// A sample at `t` out of flight, its value not read: [`Welch::push`] with `keep` false
+    /// (which never uses the value).
     #[inline]
     pub(crate) fn skip(&mut self, t: u64) {
-        match &mut self.state {
-            Some(s) => {
-                if s.segments >= MAX_SEGMENTS {
-                    return;
-                }
-                s.run.clear();
-                self.last = Some(t);
-            }
-            None => {
-                self.start(t, f64::NAN, false);
-            }
-        }
+        self.push(t, f64::NAN, false);
     }
 
     /// Before the rate is known: keeps the sample, until its time gives the rate, then
@@ -88,6 +77,9 @@ impl Welch {
             None => {
                 if keep && x.is_finite() {
                     self.early.push((t, x));
+                } else {
+                    // The run ends here, as `take` ends it.
+                    self.early.clear();
                 }
                 false
             }
@@ -205,25 +197,48 @@ mod tests {
         assert!(w.finish().is_none());
     }
 
-    /// A sample skipped out of flight is one pushed with `keep` false, whatever its value,
-    /// before the rate is known (the first 64 intervals) and after: the same estimate.
+    /// A sample skipped out of flight is one pushed with `keep` false, whatever its value:
+    /// before the rate is known (the 65th sample gives it, out of flight here) and after,
+    /// stretches of one, two and 300 samples. Skipping them cuts the runs: feeding only the
+    /// samples in flight (joined across the short stretches) gives another estimate.
     #[test]
     fn a_skipped_sample_is_a_sample_pushed_out_of_flight() {
-        let (mut pushed, mut skipped) = (Welch::default(), Welch::default());
+        let out = |i: u64| {
+            i == 64 || i == 3_000 || (7_000..7_002).contains(&i) || (12_000..12_300).contains(&i)
+        };
+        let (mut pushed, mut skipped, mut left_out) =
+            (Welch::default(), Welch::default(), Welch::default());
         for i in 0..30_000u64 {
-            // In flight but for the first 40 samples and two stretches later.
-            let keep = i >= 40 && !(5_000..5_300).contains(&i) && !(12_000..12_010).contains(&i);
             let x = ((i * 37) % 101) as f64;
-            pushed.push(i * 2_000, x, keep);
-            if keep {
-                skipped.push(i * 2_000, x, true);
+            let t = i * 2_000;
+            pushed.push(t, x, !out(i));
+            if out(i) {
+                skipped.skip(t);
             } else {
-                skipped.skip(i * 2_000);
+                skipped.push(t, x, true);
+                left_out.push(t, x, true);
             }
         }
         let (a, b) = (pushed.finish().unwrap(), skipped.finish().unwrap());
         assert!(a.segments > 50, "{}", a.segments);
         assert_eq!(a, b);
+        assert_ne!(a, left_out.finish().unwrap());
+    }
+
+    /// Before the rate is known (the first 64 intervals), a sample out of flight ends the
+    /// run too: the samples after it make the same estimate as a signal that starts there.
+    #[test]
+    fn a_run_ends_out_of_flight_before_the_rate_is_known() {
+        let (mut cut, mut fresh) = (Welch::default(), Welch::default());
+        for i in 0..20_000u64 {
+            let x = ((i * 37) % 101) as f64;
+            let t = i * 2_000;
+            cut.push(t, x, i != 30);
+            if i > 30 {
+                fresh.push(t, x, true);
+            }
+        }
+        assert_eq!(cut.finish().unwrap(), fresh.finish().unwrap());
     }
 
     #[test]

@@ -102,23 +102,32 @@ impl StepResponse {
         }
     }
 
-    /// A measured rate sample (deg/s) at `t` µs; `keep` false ends the current run.
+    /// A measured rate sample (deg/s) at `t` µs; `keep` false, or a value that is not
+    /// finite, ends the current run (the next starts at its first sample, as after
+    /// [`StepResponse::skip`]).
     pub(crate) fn gyro(&mut self, t: u64, value: f64, keep: bool) {
+        // What the next sample interpolates from: nothing after a sample out of flight or
+        // not finite (its run starts at its own first sample).
+        let sample = (keep && value.is_finite()).then_some((t, value));
         let Some(dt) = self.interval.see(t) else {
-            self.last = Some((t, value));
+            self.last = sample;
             return;
         };
         let state = self.state.get_or_insert_with(|| State::new(dt, t));
         if state.flen < 2 {
             // A gyro logged every second or slower: no frame holds two samples, so no step.
-            self.last = Some((t, value));
+            self.last = sample;
             return;
         }
         let (Some((t0, v0)), Some(sp)) = (self.last, self.setpoint) else {
-            self.last = Some((t, value));
+            if self.last.is_none() {
+                // A run's first sample (after a skipped one, say): the grid starts here.
+                state.reset(t);
+            }
+            self.last = sample;
             return;
         };
-        self.last = Some((t, value));
+        self.last = sample;
         if !keep || !value.is_finite() || breaks_run(t0, t, dt.max(state.dt_us)) {
             state.reset(t);
             return;
@@ -134,17 +143,14 @@ impl StepResponse {
     }
 
     /// A measured rate sample at `t` µs out of flight: it ends the current run, and the
-    /// next run starts at its first sample in flight (the value is not needed: it is read
-    /// only in flight).
+    /// next run's grid starts at its first sample in flight (the value is not needed: it is
+    /// read only in flight).
     #[inline]
     pub(crate) fn skip(&mut self, t: u64) {
-        if self.interval.see(t).is_none() {
-            return;
-        }
+        // The interval is learnt from every sample; the next sample in flight finds no last
+        // one and starts the grid (`gyro`).
+        self.interval.see(t);
         self.last = None;
-        if let Some(state) = &mut self.state {
-            state.reset(t);
-        }
     }
 
     /// Whether enough windows counted: [`StepResponse::finish`] gives a response.
@@ -471,24 +477,106 @@ mod tests {
 
     /// After samples out of flight, a run's grid starts at its first sample in flight: 200
     /// Hz, 1 s windows every 12 samples, so `200 + 10 × 12 - 1` samples in flight make 10
-    /// windows (11 had the last sample before takeoff started the run).
+    /// windows (11 had the last sample before takeoff started the run). The same after a
+    /// flight and a stretch of two samples on the ground (less than the three intervals
+    /// that break a run by time): the run before counts nothing.
     #[test]
     fn a_run_after_skipped_samples_starts_at_its_first_sample_in_flight() {
-        let windows = |in_flight: u64| {
+        let windows = |before: u64, in_flight: u64| {
             let mut s = StepResponse::default();
             s.setpoint(100.0);
             let dt = 5_000;
-            for i in 0..300 {
-                s.skip(i * dt);
+            let mut t = 0;
+            let mut sample = |s: &mut StepResponse, keep: bool| {
+                t += dt;
+                if keep {
+                    s.gyro(t, 90.0 + (t / dt % 7) as f64, true);
+                } else {
+                    s.skip(t);
+                }
+            };
+            for _ in 0..300 {
+                sample(&mut s, false);
             }
-            for i in 300..300 + in_flight {
-                s.gyro(i * dt, 90.0 + (i % 7) as f64, true);
+            for _ in 0..before {
+                sample(&mut s, true);
+            }
+            for _ in 0..2 {
+                sample(&mut s, false);
+            }
+            for _ in 0..in_flight {
+                sample(&mut s, true);
             }
             s.finish().and_then(|r| r.low).map(|(n, _)| n)
         };
-        assert_eq!(windows(200 + 10 * 12 - 1), Some(10));
-        assert_eq!(windows(200 + 10 * 12), Some(11));
-        assert_eq!(windows(200 + 9 * 12 - 1), None, "9 windows are too few");
+        assert_eq!(windows(0, 200 + 10 * 12 - 1), Some(10));
+        assert_eq!(windows(0, 200 + 10 * 12), Some(11));
+        assert_eq!(windows(0, 200 + 9 * 12 - 1), None, "9 windows are too few");
+        // 150 samples before: no window of their own, none with the ones after.
+        assert_eq!(windows(150, 200 + 10 * 12 - 1), Some(10));
+    }
+
+    /// A rate that is not finite in flight ends the run as a sample out of flight does: the
+    /// same response as skipping it (before, the next grid point interpolated from it, and
+    /// the windows holding that NaN counted with no step).
+    #[test]
+    fn a_rate_that_is_not_finite_ends_the_run() {
+        let response = |nan: bool| {
+            let mut s = StepResponse::default();
+            for i in 0..5_000u64 {
+                let sp = if (i / 50) % 2 == 0 { 100.0 } else { -100.0 };
+                s.setpoint(sp);
+                let t = i * 4_000;
+                if i == 2_000 && nan {
+                    s.gyro(t, f64::NAN, true);
+                } else if i == 2_000 {
+                    s.skip(t);
+                } else {
+                    s.gyro(t, sp * 0.9, true);
+                }
+            }
+            s.finish().unwrap()
+        };
+        let (with_nan, skipped) = (response(true), response(false));
+        let (windows, step) = with_nan.low.clone().unwrap();
+        assert!(step.iter().all(|v| v.is_finite()));
+        assert_eq!(with_nan, skipped);
+        // Two runs: 2000 and 2999 samples at 250 Hz, windows every 15 samples.
+        assert_eq!(
+            windows,
+            (1 + (2_000 - 64 - 1 - 250) / 15) + (1 + (2_999 - 250) / 15)
+        );
+    }
+
+    /// A flight, samples out of flight, and a flight at 7e18 µs: the second run's grid
+    /// starts at its first sample (not at the last skipped one, 7e18 µs of grid points
+    /// before).
+    #[test]
+    fn a_run_after_a_time_jump_starts_at_its_first_sample() {
+        let (done, finished) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let mut s = StepResponse::default();
+            s.setpoint(100.0);
+            for i in 0..400 {
+                s.gyro(i * 5_000, 90.0, true);
+            }
+            for i in 400..410 {
+                s.skip(i * 5_000);
+            }
+            for i in 0..1_000 {
+                s.gyro(7_000_000_000_000_000_000 + i * 5_000, 90.0, true);
+            }
+            done.send(s.finish().and_then(|r| r.low).map(|(n, _)| n))
+                .unwrap();
+        });
+        let windows = finished
+            .recv_timeout(std::time::Duration::from_secs(60))
+            .expect("done in a minute: one grid point a sample");
+        // The first flight's windows and the second's.
+        assert_eq!(
+            windows,
+            Some(1 + (400 - 64 - 200) / 12 + 1 + (1_000 - 200) / 12)
+        );
     }
 
     #[test]
