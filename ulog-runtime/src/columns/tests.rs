@@ -406,3 +406,22 @@ fn threads_gathering_runs_of_many_batches_write_the_columns_one_thread_makes() {
         assert_eq!(gathered.rows(), 3_000, "{threads} threads");
     }
 }
+
+#[test]
+fn a_row_batch_of_timestamps_alone_keeps_every_timestamp() {
+    // A format with nothing but its timestamp: rows of no bytes. More rows than a block of
+    // 32 KiB of rows (the rows' bytes are no guide to how many there are).
+    let (_, spec) = spec_of(&["heartbeat:uint64_t timestamp;"], "heartbeat", false);
+    let spec = std::sync::Arc::new(spec);
+    assert_eq!(spec.row_len(), 0);
+    let mut batch = RowBatch::with_capacity(spec.clone(), 0);
+    let n = 40_000u64;
+    for i in 0..n {
+        assert!(batch.push(&(i * 7).to_le_bytes(), i * 7));
+    }
+    let columns = batch.columns();
+    assert_eq!(columns.rows(), n as usize);
+    let ts = columns.get("timestamp").unwrap().as_uint64().unwrap();
+    assert_eq!(ts.len(), n as usize);
+    assert!(ts.iter().enumerate().all(|(i, &t)| t == i as u64 * 7));
+}
