@@ -69,3 +69,132 @@ pub(crate) fn hann_periodic(n: usize) -> Vec<f64> {
         .map(|k| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * k as f64 / n as f64).cos())
         .collect()
 }
+
+/// Properties of both analyses over any sequence of samples: a sample skipped out of flight
+/// is one fed out of flight (whatever its value), a rate that is not finite in flight is one
+/// skipped, and no sequence (times jumping anywhere in `u64`, values not finite) panics or
+/// makes a call loop for long. The sequences are runs of samples at 250 Hz, most in flight
+/// and long enough for windows and segments, so that most cases compare estimates, not
+/// their absence (counted: a property that compared nothing would fail).
+#[cfg(test)]
+mod properties {
+    use super::{StepResponse, Welch};
+    use proptest::prelude::*;
+    use proptest::test_runner::{Config, TestRunner};
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    /// A stretch of samples: in flight, out of flight, not finite (in flight), or a jump
+    /// of the clock.
+    #[derive(Debug, Clone, Copy)]
+    enum Stretch {
+        Flight(usize),
+        Ground(usize),
+        NotFinite(usize),
+        Jump(u64),
+    }
+
+    /// Samples: (time, value, in flight).
+    fn samples() -> impl Strategy<Value = Vec<(u64, f64, bool)>> {
+        let stretch = prop_oneof![
+            5 => (100usize..700).prop_map(Stretch::Flight),
+            2 => (1usize..100).prop_map(Stretch::Flight),
+            2 => (1usize..40).prop_map(Stretch::Ground),
+            1 => (1usize..3).prop_map(Stretch::NotFinite),
+            1 => prop_oneof![
+                Just(0u64),
+                8_000u64..20_000,
+                Just(7_000_000_000_000_000_000),
+                Just(u64::MAX),
+            ]
+            .prop_map(Stretch::Jump),
+        ];
+        proptest::collection::vec(stretch, 1..12).prop_map(|stretches| {
+            let mut t = 0u64;
+            let mut out = Vec::new();
+            let mut wave = 0u64;
+            for s in stretches {
+                let (n, keep, finite) = match s {
+                    Stretch::Flight(n) => (n, true, true),
+                    Stretch::Ground(n) => (n, false, true),
+                    Stretch::NotFinite(n) => (n, true, false),
+                    Stretch::Jump(dt) => {
+                        t = t.saturating_add(dt);
+                        continue;
+                    }
+                };
+                for _ in 0..n {
+                    t = t.saturating_add(4_000);
+                    wave += 1;
+                    let x = if finite {
+                        ((wave * 37) % 200) as f64 - 100.0
+                    } else {
+                        f64::NAN
+                    };
+                    out.push((t, x, keep));
+                }
+            }
+            out
+        })
+    }
+
+    /// Runs `property` on 96 sequences; returns how many gave an estimate.
+    fn check(property: impl Fn(&[(u64, f64, bool)]) -> bool) -> usize {
+        let estimates = AtomicUsize::new(0);
+        let mut runner = TestRunner::new(Config {
+            cases: 96,
+            failure_persistence: None,
+            ..Config::default()
+        });
+        runner
+            .run(&samples(), |s| {
+                if property(&s) {
+                    estimates.fetch_add(1, Ordering::Relaxed);
+                }
+                Ok(())
+            })
+            .unwrap();
+        estimates.into_inner()
+    }
+
+    #[test]
+    fn welch_skip_is_push_out_of_flight() {
+        let estimates = check(|s| {
+            let (mut pushed, mut skipped) = (Welch::default(), Welch::default());
+            for &(t, x, keep) in s {
+                pushed.push(t, x, keep);
+                if keep {
+                    skipped.push(t, x, true);
+                } else {
+                    skipped.skip(t);
+                }
+            }
+            let (a, b) = (pushed.finish(), skipped.finish());
+            assert_eq!(a, b, "{s:?}");
+            a.is_some()
+        });
+        assert!(estimates > 20, "{estimates} of 96 cases made an estimate");
+    }
+
+    #[test]
+    fn step_skip_is_gyro_out_of_flight_or_not_finite() {
+        let responses = check(|s| {
+            let (mut fed, mut skipped) = (StepResponse::default(), StepResponse::default());
+            for (i, &(t, x, keep)) in s.iter().enumerate() {
+                // A square wave above the threshold: the windows count.
+                let sp = if (i / 40) % 2 == 0 { 100.0 } else { -100.0 };
+                fed.setpoint(sp);
+                skipped.setpoint(sp);
+                fed.gyro(t, x, keep);
+                if keep && x.is_finite() {
+                    skipped.gyro(t, x, true);
+                } else {
+                    skipped.skip(t);
+                }
+            }
+            let (a, b) = (fed.finish(), skipped.finish());
+            assert_eq!(a, b, "{s:?}");
+            a.is_some()
+        });
+        assert!(responses > 20, "{responses} of 96 cases made a response");
+    }
+}

@@ -132,13 +132,17 @@ impl StepResponse {
             state.reset(t);
             return;
         }
-        // Grid points between the last sample and this one, interpolated.
+        // Grid points between the last sample and this one, interpolated (the last grid
+        // point of time ends it, at the end of `u64`).
         while state.next_t <= t {
             if state.next_t >= t0 {
                 let f = (state.next_t - t0) as f64 / (t - t0) as f64;
                 state.push(sp, v0 + f * (value - v0));
             }
-            state.next_t += state.dt_us;
+            match state.next_t.checked_add(state.dt_us) {
+                Some(next) => state.next_t = next,
+                None => break,
+            }
         }
     }
 
@@ -608,6 +612,28 @@ mod tests {
         // A slower loop rises later.
         let slow = loop_response(0.1, 0.01).low.unwrap().1;
         assert!(slow[(0.05 * 250.0) as usize] < at(0.05) - 0.2);
+    }
+
+    /// Samples up to the last microsecond `u64` holds: the grid stops there (its next point
+    /// would overflow; it wrapped around to 0 and looped again).
+    #[test]
+    fn samples_at_the_end_of_time_end_the_grid() {
+        let (done, finished) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let mut s = StepResponse::default();
+            s.setpoint(100.0);
+            let n = 2_000u64;
+            for i in 0..=n {
+                s.gyro(u64::MAX - (n - i) * 4_000, 90.0 + (i % 5) as f64, true);
+            }
+            done.send(s.finish().and_then(|r| r.low).map(|(n, _)| n))
+                .unwrap();
+        });
+        let windows = finished
+            .recv_timeout(std::time::Duration::from_secs(60))
+            .expect("done in a minute");
+        // 2001 samples, the first 65 to learn the rate: windows of 250 every 15.
+        assert_eq!(windows, Some(1 + (2_001 - 65 - 1 - 250) / 15));
     }
 
     #[test]
