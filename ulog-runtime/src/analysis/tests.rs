@@ -112,6 +112,8 @@ pub(crate) struct Faults {
     pub(crate) steps: bool,
     /// Roll rates of 1000 deg/s out of flight (a vehicle turned by hand on the ground).
     pub(crate) ground_spin: bool,
+    /// The position innovation failing from 45 s to the end of the log (past the landing).
+    pub(crate) ekf_to_the_end: bool,
 }
 
 const S: u64 = 1_000_000;
@@ -206,7 +208,7 @@ pub(crate) fn flight(faults: Faults) -> Vec<u8> {
                 },
             )
             .unwrap();
-            let bad = faults.ekf && within(t, 20, 27);
+            let bad = (faults.ekf && within(t, 20, 27)) || (faults.ekf_to_the_end && t >= 45 * S);
             w.write(
                 &estimator,
                 &EstimatorStatus {
@@ -470,6 +472,16 @@ fn each_fault_is_found_with_its_time_and_severity() {
         ..Faults::default()
     });
     assert_eq!(one(&ekf), ("ekf_failure", Severity::Critical, 20.0, 27.0));
+    // Failing past the landing: the episode ends at the landing (the first row out of
+    // flight), not at the end of the log.
+    let landing = analysis(Faults {
+        ekf_to_the_end: true,
+        ..Faults::default()
+    });
+    assert_eq!(
+        one(&landing),
+        ("ekf_failure", Severity::Critical, 45.0, 50.0)
+    );
     let gps = analysis(Faults {
         gps: true,
         ..Faults::default()

@@ -27,6 +27,8 @@ const RATIOS: [(&str, &str); 6] = [
 pub(crate) struct Fields {
     multi_id: u8,
     ratios: Vec<(usize, Leaf)>,
+    /// The ratios bound, a bit each.
+    mask: u8,
 }
 
 impl Fields {
@@ -36,7 +38,12 @@ impl Fields {
             .enumerate()
             .filter_map(|(k, (name, _))| Some((k, index.get(name)?)))
             .collect();
-        (!ratios.is_empty()).then_some(Fields { multi_id, ratios })
+        let mask = ratios.iter().fold(0u8, |m, &(k, _)| m | 1 << k);
+        (!ratios.is_empty()).then_some(Fields {
+            multi_id,
+            ratios,
+            mask,
+        })
     }
 }
 
@@ -53,12 +60,27 @@ pub(crate) struct Ekf {
     tracks: Vec<((u8, usize), Track)>,
     /// Per estimator instance and ratio (`multi_id * 6 + k`): its track's index + 1.
     slots: Vec<u16>,
+    /// Per estimator instance, the ratios with a track, a bit each.
+    tracked: Vec<u8>,
+    /// Episodes open now, over every track.
+    open: usize,
     found: Vec<(u8, usize, u64, u64, f64)>,
 }
 
 impl Ekf {
     pub(crate) fn row(&mut self, f: &Fields, data: &[u8], t: u64, state: &FlightState) {
         let flying = state.flying();
+        // Out of flight, with no episode to end and a track for every ratio (the first
+        // sight of each makes it, in order), a row changes nothing: its ratios are not read.
+        if !flying
+            && self.open == 0
+            && self
+                .tracked
+                .get(usize::from(f.multi_id))
+                .is_some_and(|&m| m & f.mask == f.mask)
+        {
+            return;
+        }
         for &(k, leaf) in &f.ratios {
             let Some(r) = leaf.f64(data).filter(|r| r.is_finite()) else {
                 continue;
@@ -71,17 +93,28 @@ impl Ekf {
                 self.tracks.push(((f.multi_id, k), Track::default()));
                 // At most 256 instances × 6 ratios.
                 self.slots[slot] = self.tracks.len() as u16;
+                let m = usize::from(f.multi_id);
+                if self.tracked.len() <= m {
+                    self.tracked.resize(m + 1, 0);
+                }
+                self.tracked[m] |= 1 << k;
             }
             let track = &mut self.tracks[usize::from(self.slots[slot]) - 1].1;
             let bad = flying && r > THRESHOLD;
             if bad {
                 track.worst = track.worst.max(r);
             }
+            let was_open = track.episode.since.is_some();
             if let Some((start, end)) = track.episode.see(bad, t) {
                 if end - start >= WARNING_US {
                     self.found.push((f.multi_id, k, start, end, track.worst));
                 }
                 track.worst = 0.0;
+            }
+            match (was_open, track.episode.since.is_some()) {
+                (false, true) => self.open += 1,
+                (true, false) => self.open -= 1,
+                _ => {}
             }
         }
     }
