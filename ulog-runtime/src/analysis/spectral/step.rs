@@ -557,10 +557,7 @@ mod tests {
     /// before).
     #[test]
     fn a_run_after_a_time_jump_starts_at_its_first_sample() {
-        let (done, finished) = std::sync::mpsc::channel();
-        std::thread::spawn(move || {
-            let mut s = StepResponse::default();
-            s.setpoint(100.0);
+        let windows = windows_within_a_minute(|s| {
             for i in 0..400 {
                 s.gyro(i * 5_000, 90.0, true);
             }
@@ -570,12 +567,7 @@ mod tests {
             for i in 0..1_000 {
                 s.gyro(7_000_000_000_000_000_000 + i * 5_000, 90.0, true);
             }
-            done.send(s.finish().and_then(|r| r.low).map(|(n, _)| n))
-                .unwrap();
         });
-        let windows = finished
-            .recv_timeout(std::time::Duration::from_secs(60))
-            .expect("done in a minute: one grid point a sample");
         // The first flight's windows and the second's.
         assert_eq!(
             windows,
@@ -618,22 +610,33 @@ mod tests {
     /// would overflow; it wrapped around to 0 and looped again).
     #[test]
     fn samples_at_the_end_of_time_end_the_grid() {
-        let (done, finished) = std::sync::mpsc::channel();
-        std::thread::spawn(move || {
-            let mut s = StepResponse::default();
-            s.setpoint(100.0);
+        let windows = windows_within_a_minute(|s| {
             let n = 2_000u64;
             for i in 0..=n {
                 s.gyro(u64::MAX - (n - i) * 4_000, 90.0 + (i % 5) as f64, true);
             }
+        });
+        // 2001 samples, the first 65 to learn the rate: windows of 250 every 15.
+        assert_eq!(windows, Some(1 + (2_001 - 65 - 1 - 250) / 15));
+    }
+
+    /// The windows of the low response of a `StepResponse` (setpoint 100 deg/s) fed by
+    /// `feed` on a thread of its own: a feed that loops for ever fails the test after a
+    /// minute instead of hanging it.
+    fn windows_within_a_minute(
+        feed: impl FnOnce(&mut StepResponse) + Send + 'static,
+    ) -> Option<usize> {
+        let (done, finished) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let mut s = StepResponse::default();
+            s.setpoint(100.0);
+            feed(&mut s);
             done.send(s.finish().and_then(|r| r.low).map(|(n, _)| n))
                 .unwrap();
         });
-        let windows = finished
+        finished
             .recv_timeout(std::time::Duration::from_secs(60))
-            .expect("done in a minute");
-        // 2001 samples, the first 65 to learn the rate: windows of 250 every 15.
-        assert_eq!(windows, Some(1 + (2_001 - 65 - 1 - 250) / 15));
+            .expect("fed within a minute")
     }
 
     #[test]
