@@ -27,8 +27,6 @@ const RATIOS: [(&str, &str); 6] = [
 pub(crate) struct Fields {
     multi_id: u8,
     ratios: Vec<(usize, Leaf)>,
-    /// The ratios bound, a bit each.
-    mask: u8,
 }
 
 impl Fields {
@@ -38,12 +36,7 @@ impl Fields {
             .enumerate()
             .filter_map(|(k, (name, _))| Some((k, index.get(name)?)))
             .collect();
-        let mask = ratios.iter().fold(0u8, |m, &(k, _)| m | 1 << k);
-        (!ratios.is_empty()).then_some(Fields {
-            multi_id,
-            ratios,
-            mask,
-        })
+        (!ratios.is_empty()).then_some(Fields { multi_id, ratios })
     }
 }
 
@@ -53,6 +46,11 @@ struct Track {
     worst: f64,
 }
 
+/// Where ratio `k` of `f`'s estimator is in [`Ekf`]'s `slots`.
+fn slot(f: &Fields, k: usize) -> usize {
+    usize::from(f.multi_id) * RATIOS.len() + k
+}
+
 /// Every estimator's innovations.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Ekf {
@@ -60,8 +58,6 @@ pub(crate) struct Ekf {
     tracks: Vec<((u8, usize), Track)>,
     /// Per estimator instance and ratio (`multi_id * 6 + k`): its track's index + 1.
     slots: Vec<u16>,
-    /// Per estimator instance, the ratios with a track, a bit each.
-    tracked: Vec<u8>,
     /// Episodes open now, over every track.
     open: usize,
     found: Vec<(u8, usize, u64, u64, f64)>,
@@ -72,20 +68,14 @@ impl Ekf {
         let flying = state.flying();
         // Out of flight, with no episode to end and a track for every ratio (the first
         // sight of each makes it, in order), a row changes nothing: its ratios are not read.
-        if !flying
-            && self.open == 0
-            && self
-                .tracked
-                .get(usize::from(f.multi_id))
-                .is_some_and(|&m| m & f.mask == f.mask)
-        {
+        if !flying && self.open == 0 && f.ratios.iter().all(|&(k, _)| self.tracks_of(f, k)) {
             return;
         }
         for &(k, leaf) in &f.ratios {
             let Some(r) = leaf.f64(data).filter(|r| r.is_finite()) else {
                 continue;
             };
-            let slot = usize::from(f.multi_id) * RATIOS.len() + k;
+            let slot = slot(f, k);
             if self.slots.len() <= slot {
                 self.slots.resize(slot + 1, 0);
             }
@@ -93,11 +83,6 @@ impl Ekf {
                 self.tracks.push(((f.multi_id, k), Track::default()));
                 // At most 256 instances × 6 ratios.
                 self.slots[slot] = self.tracks.len() as u16;
-                let m = usize::from(f.multi_id);
-                if self.tracked.len() <= m {
-                    self.tracked.resize(m + 1, 0);
-                }
-                self.tracked[m] |= 1 << k;
             }
             let track = &mut self.tracks[usize::from(self.slots[slot]) - 1].1;
             let bad = flying && r > THRESHOLD;
@@ -117,6 +102,11 @@ impl Ekf {
                 _ => {}
             }
         }
+    }
+
+    /// Whether ratio `k` of `f`'s estimator has a track.
+    fn tracks_of(&self, f: &Fields, k: usize) -> bool {
+        self.slots.get(slot(f, k)).is_some_and(|&s| s != 0)
     }
 
     pub(crate) fn finish(mut self, end: u64) -> Vec<Diagnostic> {

@@ -128,7 +128,7 @@ impl StepResponse {
             return;
         };
         self.last = sample;
-        if !keep || !value.is_finite() || breaks_run(t0, t, dt.max(state.dt_us)) {
+        if sample.is_none() || breaks_run(t0, t, dt.max(state.dt_us)) {
             state.reset(t);
             return;
         }
