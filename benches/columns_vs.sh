@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Log::open, the per-subscription row index (made by the first Log::columns), then
-# Log::columns and record_batches of every topic instance, this tree against another commit,
-# in one run: `columns_speed` built against both (the other commit checked out as a git
-# worktree under target/), run interleaved, the medians and their ratio printed.
+# Log::columns and record_batches of every topic instance, and all_column_parts of the
+# log, this tree against another commit, in one run: `columns_speed` built against both
+# (the other commit checked out as a git worktree under target/), run interleaved, the
+# medians and their ratio printed.
 #
 #   benches/columns_vs.sh COMMIT LOG [RUNS]
 #
@@ -41,7 +42,7 @@ for r in range(runs):
             times.setdefault((b, what), []).append(float(secs))
 cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), "?")
 print(f"CPU: {cpu}; {runs} runs each, interleaved; log {log}")
-for what in ("open", "index", "columns", "batches"):
+for what in ("open", "index", "columns", "batches", "all"):
     o, n = statistics.median(times[(old, what)]), statistics.median(times[(new, what)])
     print(f"  {what:8} {commit}: {o:.3f} s   this tree: {n:.3f} s   speed-up {o / n:.2f}x")
 PY

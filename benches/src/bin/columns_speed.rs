@@ -1,7 +1,8 @@
 //! The time `Log::open` takes (`open S` line), the first `Log::columns` call, which makes the
 //! per-subscription row index (`index S`), then `Log::columns` and
 //! `columns::arrow::record_batches` of every topic instance of the log, one after the other
-//! (`columns S` and `batches S` lines).
+//! (`columns S` and `batches S` lines), and every instance's columns in one pass,
+//! `Log::all_column_parts` (`all S`).
 //! It uses only APIs older versions of the library have too, so that
 //! `benches/columns_vs.sh` can build it against another commit and run both interleaved.
 //!
@@ -58,4 +59,9 @@ fn main() {
         }
     }
     println!("batches {:.6} {rows}", t.elapsed().as_secs_f64());
+    let t = Instant::now();
+    let parts = log.all_column_parts();
+    let rows: usize = parts.iter().flat_map(|(_, _, p)| p).map(|c| c.rows()).sum();
+    drop(parts);
+    println!("all {:.6} {rows}", t.elapsed().as_secs_f64());
 }

@@ -679,12 +679,7 @@ impl RowBatch {
         for (i, timestamps) in self.timestamps.chunks(stage_rows).enumerate() {
             let start = i * stage_rows * stride;
             let bytes = &self.bytes[start..start + timestamps.len() * stride];
-            append(
-                &self.spec,
-                bytes.chunks_exact(stride.max(1)),
-                timestamps,
-                &mut values,
-            );
+            append(&self.spec, bytes, timestamps, &mut values);
         }
         Columns {
             spec: self.spec,
@@ -696,9 +691,7 @@ impl RowBatch {
     /// Appends the rows to `columns` (one vector per column of the spec), leaving the batch
     /// empty.
     fn append_to(&mut self, columns: &mut [ColumnValues]) {
-        // A spec without value columns reads no bytes: its rows are empty.
-        let rows = self.bytes.chunks_exact(self.spec.row_len.max(1));
-        append(&self.spec, rows, &self.timestamps, columns);
+        append(&self.spec, &self.bytes, &self.timestamps, columns);
         self.bytes.clear();
         self.timestamps.clear();
     }
@@ -720,12 +713,12 @@ impl Columns {
     }
 }
 
-/// Appends `rows` (one item a row, at least the spec's `row_len` bytes; iterated once a
-/// column) and their `timestamps` to `columns`, one vector per column of `spec`.
-fn append<'r, I>(spec: &ColumnSpec, rows: I, timestamps: &[u64], columns: &mut [ColumnValues])
-where
-    I: Iterator<Item = &'r [u8]> + Clone,
-{
+/// Appends `rows` (`timestamps.len()` rows of the spec's `row_len` bytes each, back to
+/// back; none when the spec reads no bytes) and their `timestamps` to `columns`, one vector
+/// per column of `spec`.
+fn append(spec: &ColumnSpec, rows: &[u8], timestamps: &[u64], columns: &mut [ColumnValues]) {
+    let stride = spec.row_len;
+    debug_assert_eq!(rows.len(), timestamps.len() * stride, "whole rows");
     for (c, values) in spec.columns.iter().zip(columns.iter_mut()) {
         match (c.source, c.kind) {
             (Source::Timestamp, _) => {
@@ -733,10 +726,10 @@ where
                     v.extend_from_slice(timestamps);
                 }
             }
-            (Source::Offset(at), ColumnKind::Value(_)) => gather(rows.clone(), at, values),
+            (Source::Offset(at), ColumnKind::Value(_)) => gather(rows, stride, at, values),
             (Source::Offset(at), ColumnKind::Text { len }) => {
                 if let ColumnValues::Text(v) = values {
-                    v.extend(rows.clone().map(|r| text(&r[at..at + len])));
+                    v.extend(rows.chunks_exact(stride).map(|r| text(&r[at..at + len])));
                 }
             }
         }
@@ -767,31 +760,45 @@ fn empty_columns(spec: &ColumnSpec, rows: usize) -> Vec<ColumnValues> {
         .collect()
 }
 
-/// Appends to one column the value at `at` of each row.
+/// Appends to one column the value at `at` of each row of `rows` (`stride` bytes a row,
+/// back to back; the value within the row).
 #[inline]
-fn gather<'r>(rows: impl Iterator<Item = &'r [u8]>, at: usize, values: &mut ColumnValues) {
+fn gather(rows: &[u8], stride: usize, at: usize, values: &mut ColumnValues) {
+    // Whole rows only (a spec that reads no bytes has no values to take).
+    let n = rows.len().checked_div(stride).unwrap_or(0);
+    if n == 0 {
+        return;
+    }
     macro_rules! extend {
-        ($v:expr, $ty:ty) => {{
+        ($v:expr, $ty:ty, |$x:ident| $out:expr) => {{
             const SIZE: usize = size_of::<$ty>();
-            $v.extend(rows.map(|r| {
-                let (v, _) = r[at..].split_first_chunk::<SIZE>().expect("in the row");
-                <$ty>::from_le_bytes(*v)
+            assert!(at + SIZE <= stride, "a value within its row");
+            // Every value read below lies in `rows`: the last ends at
+            // `(n - 1) * stride + at + SIZE <= n * stride <= rows.len()`.
+            let first = rows[at..].as_ptr();
+            $v.extend((0..n).map(|i| {
+                // SAFETY: `i < n`, so the `SIZE` bytes at `i * stride` from the first
+                // value are in `rows` (the bound above); an unaligned read of bytes.
+                #[allow(unsafe_code)]
+                let bytes = unsafe { first.add(i * stride).cast::<[u8; SIZE]>().read_unaligned() };
+                let $x = <$ty>::from_le_bytes(bytes);
+                $out
             }));
         }};
     }
     match values {
-        ColumnValues::Int8(v) => extend!(v, i8),
-        ColumnValues::UInt8(v) => v.extend(rows.map(|r| r[at])),
-        ColumnValues::Int16(v) => extend!(v, i16),
-        ColumnValues::UInt16(v) => extend!(v, u16),
-        ColumnValues::Int32(v) => extend!(v, i32),
-        ColumnValues::UInt32(v) => extend!(v, u32),
-        ColumnValues::Int64(v) => extend!(v, i64),
-        ColumnValues::UInt64(v) => extend!(v, u64),
-        ColumnValues::Float(v) => extend!(v, f32),
-        ColumnValues::Double(v) => extend!(v, f64),
-        ColumnValues::Bool(v) => v.extend(rows.map(|r| r[at] != 0)),
-        ColumnValues::Char(v) => v.extend(rows.map(|r| r[at])),
+        ColumnValues::Int8(v) => extend!(v, i8, |x| x),
+        ColumnValues::UInt8(v) => extend!(v, u8, |x| x),
+        ColumnValues::Int16(v) => extend!(v, i16, |x| x),
+        ColumnValues::UInt16(v) => extend!(v, u16, |x| x),
+        ColumnValues::Int32(v) => extend!(v, i32, |x| x),
+        ColumnValues::UInt32(v) => extend!(v, u32, |x| x),
+        ColumnValues::Int64(v) => extend!(v, i64, |x| x),
+        ColumnValues::UInt64(v) => extend!(v, u64, |x| x),
+        ColumnValues::Float(v) => extend!(v, f32, |x| x),
+        ColumnValues::Double(v) => extend!(v, f64, |x| x),
+        ColumnValues::Bool(v) => extend!(v, u8, |x| x != 0),
+        ColumnValues::Char(v) => extend!(v, u8, |x| x),
         ColumnValues::Text(_) => {}
     }
 }
