@@ -729,7 +729,9 @@ fn append(spec: &ColumnSpec, rows: &[u8], timestamps: &[u64], columns: &mut [Col
             (Source::Offset(at), ColumnKind::Value(_)) => gather(rows, stride, at, values),
             (Source::Offset(at), ColumnKind::Text { len }) => {
                 if let ColumnValues::Text(v) = values {
-                    v.extend(rows.chunks_exact(stride).map(|r| text(&r[at..at + len])));
+                    // By index, not by chunks of `stride`: a text of no length can be a
+                    // format's only field (a format built in code), with rows of no bytes.
+                    v.extend((0..timestamps.len()).map(|i| text(&rows[i * stride + at..][..len])));
                 }
             }
         }

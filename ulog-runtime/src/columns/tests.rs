@@ -425,3 +425,26 @@ fn a_row_batch_of_timestamps_alone_keeps_every_timestamp() {
     assert_eq!(ts.len(), n as usize);
     assert!(ts.iter().enumerate().all(|(i, &t)| t == i as u64 * 7));
 }
+
+#[test]
+fn a_text_of_no_length_as_the_only_field_gives_an_empty_string_a_row() {
+    // A format built in code may hold what the parser refuses: `char[0]`, here its only
+    // field, so that its rows have no bytes.
+    let mut format: crate::schema::Format = "t:char[1] s;".parse().unwrap();
+    format.fields[0].array_len = Some(0);
+    let mut schema = Schema::new();
+    schema.insert(format).unwrap();
+    let id = schema.id("t").unwrap();
+    let spec = std::sync::Arc::new(ColumnSpec::new(&mut schema, id).unwrap());
+    assert_eq!(spec.row_len(), 0);
+    let mut b = ColumnBuilder::new(spec.clone());
+    let mut batch = RowBatch::with_capacity(spec, 0);
+    for t in [1, 2, 3] {
+        assert!(b.push(&[], t));
+        assert!(batch.push(&[], t));
+    }
+    let cols = b.take();
+    assert_eq!(cols.rows(), 3);
+    assert_eq!(cols.get("s").unwrap().as_text().unwrap(), ["", "", ""]);
+    assert_eq!(batch.columns(), cols);
+}
