@@ -782,7 +782,7 @@ impl<'c> Pass<'c> {
         threads: usize,
     ) -> Result<Conversion, ConvertError> {
         let root = self.converter.root.clone();
-        let (log_dir, moved) = self.converter.claim_log_dir(&self.stem, &identity.sha256);
+        let (log_dir, moved) = self.converter.claim_log_dir(&self.stem, &identity.sha256)?;
         if moved {
             self.notes.push(format!(
                 "`{}` holds another log (another sha256); this one goes to `{log_dir}`",

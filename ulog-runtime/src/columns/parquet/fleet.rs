@@ -124,16 +124,21 @@ enum Held {
     Unknown,
 }
 
-fn held(metadata: &Path) -> Held {
+/// What the log folder whose `metadata.json` is at `metadata` holds, or why that cannot be
+/// told (the output folder is a file, or may not be read): an error, not a reason to try
+/// the next name, since every next name would fail alike.
+fn held(metadata: &Path) -> std::io::Result<Held> {
     let text = match std::fs::read(metadata) {
         Ok(text) => text,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Held::Nothing,
-        Err(_) => return Held::Unknown,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Held::Nothing),
+        // A folder named `metadata.json`: something, but not a conversion's.
+        Err(e) if e.kind() == std::io::ErrorKind::IsADirectory => return Ok(Held::Unknown),
+        Err(e) => return Err(e),
     };
-    serde_json::from_slice::<serde_json::Value>(&text)
+    Ok(serde_json::from_slice::<serde_json::Value>(&text)
         .ok()
         .and_then(|doc| Some(doc.get("log")?.get("sha256")?.as_str()?.to_owned()))
-        .map_or(Held::Unknown, Held::Log)
+        .map_or(Held::Unknown, Held::Log))
 }
 
 impl Converter {
@@ -141,18 +146,27 @@ impl Converter {
     /// `<stem>~2`, `<stem>~3`... that holds this same log (its `metadata.json` has this
     /// SHA-256: a new conversion replaces it) or holds nothing, never one that holds another
     /// log (or a `metadata.json` that does not say which). The choice, and whether it is
-    /// not the first.
-    pub(super) fn claim_log_dir(&self, stem: &str, sha256: &str) -> (String, bool) {
+    /// not the first; or the error that stopped the search (a `metadata.json` that cannot be
+    /// read for another reason than its absence, such as an output folder that is a file).
+    pub(super) fn claim_log_dir(
+        &self,
+        stem: &str,
+        sha256: &str,
+    ) -> Result<(String, bool), ConvertError> {
         let layout = self.options.layout;
-        for n in 1.. {
+        for n in 1..=u32::MAX {
             let dir = layout.log_dir(stem, n);
-            match held(&layout.metadata_path(&self.root, &dir)) {
-                Held::Nothing => return (dir, n > 1),
-                Held::Log(other) if other == sha256 => return (dir, n > 1),
+            let path = layout.metadata_path(&self.root, &dir);
+            match held(&path).map_err(|source| ConvertError::Io { path, source })? {
+                Held::Nothing => return Ok((dir, n > 1)),
+                Held::Log(other) if other == sha256 => return Ok((dir, n > 1)),
                 Held::Log(_) | Held::Unknown => {}
             }
         }
-        unreachable!("a name is found before the numbers run out")
+        Err(ConvertError::Io {
+            path: self.root.clone(),
+            source: std::io::Error::other(format!("every folder name for `{stem}` is taken")),
+        })
     }
 }
 

@@ -1016,3 +1016,38 @@ fn a_files_sha256_is_the_same_hashed_as_read_or_on_a_thread_of_its_own() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn an_output_folder_that_is_a_file_is_an_error_not_an_endless_search() {
+    // Every log folder name under a file fails alike ("not a directory"): the search for a
+    // free name must stop with that error, not try `f~2`, `f~3`... for ever.
+    let root = temp("file-root");
+    std::fs::create_dir_all(&root).unwrap();
+    let file = root.join("out.ulg");
+    std::fs::write(&file, b"a file, not a folder").unwrap();
+    let bytes = log_bytes(100);
+    for out in [file.clone(), file.join("sub")] {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let (at, log) = (out.clone(), bytes.clone());
+        std::thread::spawn(move || {
+            let converted = Converter::new(&at, ParquetOptions::default())
+                .convert_reader(&log[..], "f.ulg")
+                .map(|_| ());
+            let _ = tx.send(converted);
+        });
+        let result = rx
+            .recv_timeout(std::time::Duration::from_secs(60))
+            .unwrap_or_else(|_| panic!("{}: the conversion did not end", out.display()));
+        let err = result.unwrap_err();
+        assert!(matches!(err, ConvertError::Io { .. }), "{err}");
+        assert!(
+            err.to_string().starts_with(&format!(
+                "{}",
+                out.join("f").join("metadata.json").display()
+            )),
+            "{err}"
+        );
+    }
+    assert_eq!(std::fs::read(&file).unwrap(), b"a file, not a folder");
+    std::fs::remove_dir_all(&root).unwrap();
+}
