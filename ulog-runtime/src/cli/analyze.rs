@@ -27,10 +27,24 @@ struct Line<'a> {
     analysis: &'a Analysis,
 }
 
+/// Each log's analysis in turn; a log that cannot be read is said on stderr and the others
+/// are still analysed (as `ulog parquet` converts the others), the exit code 1 at the end.
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
-    for (i, path) in args.files.iter().enumerate() {
-        let file = crate::cli::open_mapped(path)?;
-        let analysis = Analysis::of_bytes(&file).map_err(|e| Failure::at(path, e))?;
+    let mut failed = 0;
+    let mut written = 0;
+    for path in &args.files {
+        let analysis = match crate::cli::open_mapped(path)
+            .and_then(|file| Analysis::of_bytes(&file).map_err(|e| Failure::at(path, e)))
+        {
+            Ok(analysis) => analysis,
+            Err(e) => {
+                eprintln!("ulog: {}", e.text());
+                failed += 1;
+                continue;
+            }
+        };
+        let i = written;
+        written += 1;
         if args.json {
             let line = Line {
                 log: path.to_string_lossy(),
@@ -45,6 +59,12 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
             writeln!(out, "{}", path.display())?;
             write!(out, "{analysis}")?;
         }
+    }
+    if failed > 0 {
+        return Err(Failure::exit(
+            1,
+            format!("{failed} of {} logs not analysed", args.files.len()),
+        ));
     }
     Ok(())
 }

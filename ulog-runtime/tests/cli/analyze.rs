@@ -7,7 +7,7 @@ use std::path::Path;
 use std::process::Command;
 
 use super::corpus::{corpus_files, short_name, under_ci};
-use super::{stdout, temp_dir};
+use super::{stdout, temp_dir, ulog};
 
 /// The corpus logs known to be flights without a fault (or no flight at all).
 const CLEAN: [&str; 14] = [
@@ -135,4 +135,50 @@ fn json_lines_name_their_logs_in_the_order_given() {
         .map(|l| l.to_str().unwrap().to_owned())
         .collect();
     assert_eq!(named, given);
+}
+
+#[test]
+fn a_log_that_cannot_be_read_does_not_stop_the_analysis_of_the_others() {
+    // (An empty corpus fails under CI in `corpus_files`.)
+    let logs: Vec<_> = corpus_files().into_iter().take(2).collect();
+    if logs.len() < 2 {
+        return;
+    }
+    let dir = temp_dir("analyze-bad");
+    std::fs::create_dir_all(&dir).unwrap();
+    let empty = dir.join("empty.ulg");
+    std::fs::write(&empty, b"").unwrap();
+    let missing = dir.join("missing.ulg");
+    let args = [
+        "analyze",
+        "--json",
+        logs[0].to_str().unwrap(),
+        missing.to_str().unwrap(),
+        empty.to_str().unwrap(),
+        logs[1].to_str().unwrap(),
+    ];
+    let out = ulog(&args);
+    assert_eq!(out.status.code(), Some(1), "a failed log fails the run");
+    let named: Vec<String> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            let v: serde_json::Value = serde_json::from_str(l).unwrap();
+            v["log"].as_str().unwrap().to_owned()
+        })
+        .collect();
+    assert_eq!(named, [args[2], args[5]], "every readable log, in order");
+    let err = String::from_utf8(out.stderr).unwrap();
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 3, "{err}");
+    assert!(
+        lines[0].starts_with(&format!("ulog: {}: ", args[3])),
+        "{err}"
+    );
+    assert!(
+        lines[1].starts_with(&format!("ulog: {}: ", args[4])),
+        "{err}"
+    );
+    assert_eq!(lines[2], "ulog: 2 of 4 logs not analysed");
+    std::fs::remove_dir_all(&dir).unwrap();
 }
