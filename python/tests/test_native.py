@@ -140,6 +140,15 @@ def test_polars_duckdb_and_pandas_take_a_table():
         log.table("vehicle_atitude")
     with pytest.raises(KeyError, match="no column `q\\[9\\]`"):
         log.table("vehicle_attitude", columns=["q[9]"])
+    # One column name as a str is that column, not its characters.
+    assert log.table("vehicle_attitude", columns="q[0]").column_names == ["q[0]"]
+    # An instance number no instance can have is a KeyError listing the instances, as for
+    # one the log lacks (and for a topic it lacks, the closest names).
+    for bad in (5, -1, 300):
+        with pytest.raises(KeyError, match=f"has no instance {bad} \\(instances: \\[0\\]\\)"):
+            log.table("vehicle_attitude", bad)
+    with pytest.raises(KeyError, match="did you mean `vehicle_attitude`"):
+        log.table("vehicle_atitude", 300)
 
 
 def test_the_log_says_what_the_reader_read():
@@ -190,6 +199,12 @@ def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
     assert meta["analysis"]["battery"]["instances"]
     hive = ulog.to_parquet(str(good), tmp_path / "hive", layout="hive", topics=["battery_status"])
     assert all(f["topic"] == "battery_status" for f in hive[0]["files"])
+    # One topic as a str is that topic; a topic no log has rows of is a warning.
+    one = ulog.to_parquet(str(good), tmp_path / "one", topics="battery_status")
+    assert {f["topic"] for f in one[0]["files"]} == {"battery_status"}
+    with pytest.warns(UserWarning, match="no log has rows of topic `batery_status`"):
+        none = ulog.to_parquet(str(good), tmp_path / "none", topics=["batery_status"])
+    assert none[0]["ok"] and none[0]["files"] == []
     with pytest.raises(ValueError, match="layout"):
         ulog.to_parquet(str(good), tmp_path / "x", layout="flat")
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import warnings
 from typing import Any, BinaryIO, Dict, List, Optional, Sequence, Union
 
 from . import _ulog
@@ -151,9 +152,18 @@ class Log:
         start: Optional[float] = None,
         end: Optional[float] = None,
     ) -> Table:
-        """A topic instance's columns (only ``columns`` if given), the rows from ``start``
-        to ``end`` seconds as ``ulog csv --start --end`` takes them. KeyError (naming the
-        closest) for a topic or column the log lacks."""
+        """A topic instance's columns (only ``columns`` if given: names, or one name as a
+        str), the rows from ``start`` to ``end`` seconds as ``ulog csv --start --end`` takes
+        them. KeyError (naming the closest) for a topic, instance or column the log lacks."""
+        if isinstance(columns, str):
+            columns = [columns]
+        if not 0 <= multi_id <= 255:
+            # Beyond what an instance number can be: the log's instances of the topic, as
+            # for any instance it lacks (or the native error if it lacks the topic).
+            have = sorted(t["multi_id"] for t in self.topics() if t["name"] == topic)
+            if have:
+                raise KeyError(f"`{topic}` has no instance {multi_id} (instances: {have})")
+            multi_id = 0
         return Table(
             self._native.table(topic, multi_id, list(columns) if columns is not None else None, start, end)
         )
@@ -202,12 +212,16 @@ def to_parquet(
 ) -> List[Dict[str, Any]]:
     """Converts logs to Parquet as ``ulog parquet`` does (``layout`` ``"per-log"`` or
     ``"hive"``, only ``topics`` if given, ``threads`` logs at once, the flight analysis in
-    each ``metadata.json`` unless ``analysis=False``). One dict per log, in order: ``ok``
-    and what it wrote (``files``, ``metadata``, ``log_dir``, ``notes``), or ``error``; a
-    log that fails does not stop the others."""
+    each ``metadata.json`` unless ``analysis=False``; ``topics`` names, or one name as a
+    str). One dict per log, in order: ``ok`` and what it wrote (``files``, ``metadata``,
+    ``log_dir``, ``notes``), or ``error``; a log that fails does not stop the others. A
+    topic of ``topics`` that no log has rows of is a warning (``UserWarning``), as
+    ``ulog parquet -m`` says it on stderr."""
     if isinstance(paths, (str, os.PathLike)):
         paths = [paths]
-    return _ulog.to_parquet(
+    if isinstance(topics, str):
+        topics = [topics]
+    results = _ulog.to_parquet(
         [os.fspath(p) for p in paths],
         os.fspath(out_dir),
         layout,
@@ -215,3 +229,9 @@ def to_parquet(
         threads,
         analysis,
     )
+    if topics is not None:
+        written = {f["topic"] for r in results if r["ok"] for f in r["files"]}
+        for topic in topics:
+            if topic not in written:
+                warnings.warn(f"no log has rows of topic `{topic}`", stacklevel=2)
+    return results
