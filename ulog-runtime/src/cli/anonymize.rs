@@ -61,7 +61,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
             keep_time: args.keep_time,
         })
         .run_file(&args.file, &args.output)
-        .map_err(|e| Failure::at(&args.file, e))?;
+        .map_err(|e| crate::cli::rewrite_failure(&args.file, e))?;
     crate::cli::report_rewrite(&report, &args.output, out)
 }
 

@@ -40,6 +40,6 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         .topics(&args.messages)
         .exclude(&args.exclude)
         .run_file(&args.file, &args.output)
-        .map_err(|e| Failure::at(&args.file, e))?;
+        .map_err(|e| crate::cli::rewrite_failure(&args.file, e))?;
     crate::cli::report_rewrite(&report, &args.output, out)
 }

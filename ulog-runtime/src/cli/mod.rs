@@ -183,6 +183,15 @@ fn run(command: Command, out: &mut impl Write) -> Result<(), Failure> {
     }
 }
 
+/// A rewrite's failure as the CLI says it: about the output file (its path in the message),
+/// or about the input `input` (its path first).
+pub(crate) fn rewrite_failure(input: &Path, e: crate::rewrite::RewriteError) -> Failure {
+    match e {
+        crate::rewrite::RewriteError::Output { .. } => Failure::from(e.to_string()),
+        other => Failure::at(input, other),
+    }
+}
+
 /// What `ulog cut` and `ulog anonymize` print: the new log, then the report.
 pub(crate) fn report_rewrite(
     report: &crate::rewrite::Report,

@@ -69,6 +69,15 @@ pub enum RewriteError {
     /// Writing the output failed.
     #[error("writing: {0}")]
     Write(#[source] io::Error),
+    /// The output file could not be made or named ([`Rewrite::run_file`]): a folder in its
+    /// place, a folder that cannot be made, no permission.
+    #[error("{}: {source}", path.display())]
+    Output {
+        /// The output file.
+        path: std::path::PathBuf,
+        /// Why.
+        source: io::Error,
+    },
     /// A typed row transform's struct does not fit the topic's format.
     #[error(transparent)]
     Typed(#[from] TypedError),
@@ -553,28 +562,48 @@ impl Rewrite {
     }
 
     /// Rewrites the log at `input` into a new file `output` (written whole, then named: a
-    /// failure leaves nothing), refusing to write over the input.
+    /// failure leaves nothing), refusing to write over the input. The folder `output` goes
+    /// in is made if it does not exist; a folder at `output` itself is an error
+    /// ([`RewriteError::Output`]), as is a file that cannot be made there.
     pub fn run_file(&mut self, input: &Path, output: &Path) -> Result<Report, RewriteError> {
         if same_file(input, output) {
             return Err(RewriteError::SameFile(output.to_owned()));
         }
+        let out_error = |source| RewriteError::Output {
+            path: output.to_owned(),
+            source,
+        };
+        if output.is_dir() {
+            return Err(out_error(io::Error::new(
+                io::ErrorKind::IsADirectory,
+                "a folder; the output is a file (give its path)",
+            )));
+        }
         // Read as it is: the stream reader reads in chunks of its own.
         let file = std::fs::File::open(input).map_err(|e| RewriteError::Read(e.into()))?;
+        if let Some(folder) = output.parent().filter(|p| !p.as_os_str().is_empty()) {
+            if folder.exists() && !folder.is_dir() {
+                return Err(out_error(io::Error::new(
+                    io::ErrorKind::NotADirectory,
+                    format!("`{}` is not a folder", folder.display()),
+                )));
+            }
+            std::fs::create_dir_all(folder).map_err(out_error)?;
+        }
         let mut partial = output.as_os_str().to_owned();
         partial.push(".partial");
         let partial = std::path::PathBuf::from(partial);
-        let out = std::fs::File::create(&partial).map_err(RewriteError::Write)?;
-        let result = self.run(file, out);
-        match result {
-            Ok(report) => {
-                std::fs::rename(&partial, output).map_err(RewriteError::Write)?;
-                Ok(report)
-            }
-            Err(e) => {
-                let _ = std::fs::remove_file(&partial);
-                Err(e)
-            }
+        let out = std::fs::File::create(&partial).map_err(out_error)?;
+        let result =
+            self.run(file, out)
+                .and_then(|report| match std::fs::rename(&partial, output) {
+                    Ok(()) => Ok(report),
+                    Err(e) => Err(out_error(e)),
+                });
+        if result.is_err() {
+            let _ = std::fs::remove_file(&partial);
         }
+        result
     }
 }
 

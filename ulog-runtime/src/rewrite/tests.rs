@@ -611,6 +611,39 @@ fn the_output_is_never_the_input() {
 }
 
 #[test]
+fn the_output_file_gets_its_folder_and_a_folder_in_its_place_is_an_error() {
+    let dir = std::env::temp_dir().join(format!("ulog-rewrite-out-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(dir.join("a_folder")).unwrap();
+    let path = dir.join("in.ulg");
+    std::fs::write(&path, flight()).unwrap();
+    // A folder where the file should go: an error naming it, and nothing left inside.
+    let err = Rewrite::new()
+        .run_file(&path, &dir.join("a_folder"))
+        .unwrap_err();
+    assert!(
+        matches!(&err, RewriteError::Output { path, .. } if path.ends_with("a_folder")),
+        "{err}"
+    );
+    assert_eq!(std::fs::read_dir(dir.join("a_folder")).unwrap().count(), 0);
+    assert!(
+        !dir.join("a_folder.partial").exists(),
+        "no partial file left"
+    );
+    // A file where its folder should be: an error naming the output.
+    std::fs::write(dir.join("a_file"), b"x").unwrap();
+    let err = Rewrite::new()
+        .run_file(&path, &dir.join("a_file").join("out.ulg"))
+        .unwrap_err();
+    assert!(err.to_string().contains("a_file` is not a folder"), "{err}");
+    // A folder that does not exist yet is made.
+    let nested = dir.join("new").join("deeper").join("out.ulg");
+    Rewrite::new().run_file(&path, &nested).unwrap();
+    assert_eq!(std::fs::read(&nested).unwrap(), flight());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn a_subscription_of_an_undefined_format_is_dropped_and_said() {
     // A fuzzer's find: a subscription naming a format the log never defines, kept as it was,
     // made the output a log that does not read clean.
