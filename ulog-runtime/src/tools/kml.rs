@@ -68,11 +68,11 @@ pub fn kml(log: &Log<'_>, options: &KmlOptions) -> Result<String, KmlError> {
         Some(t) => t.clone(),
         None => {
             let logged = |t: &str| log.topics().iter().any(|s| s.name == t);
-            GNSS_TOPICS
-                .into_iter()
-                .find(|t| logged(t))
-                .unwrap_or(GNSS_TOPICS[0])
-                .to_owned()
+            match GNSS_TOPICS.into_iter().find(|t| logged(t)) {
+                Some(t) => t.to_owned(),
+                // Neither: the error names both.
+                None => return Err(KmlError::NoTopic(GNSS_TOPICS.join(" or "))),
+            }
         }
     };
     let mut loaded = vec![topic.clone(), "vehicle_status".to_owned()];

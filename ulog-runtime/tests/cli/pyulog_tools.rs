@@ -333,11 +333,20 @@ fn kml_equals_ulog2kml_on_every_corpus_log() {
         let ours = path_of("ours", n);
         let mine = ulog(&["kml", path.to_str().unwrap(), "-o", ours.to_str().unwrap()]);
         if run.status != 0 {
-            // pyulog finds no track (no GPS topic): neither do we.
+            // pyulog finds no track (no GPS topic): neither do we, and we say which topics
+            // we looked for.
             if mine.status.success() {
                 failures.push(format!(
                     "{}: pyulog fails, we wrote a track",
                     short_name(path)
+                ));
+            } else if !String::from_utf8_lossy(&mine.stderr)
+                .contains("vehicle_gnss or vehicle_gps_position not found in data")
+            {
+                failures.push(format!(
+                    "{}: {}",
+                    short_name(path),
+                    String::from_utf8_lossy(&mine.stderr)
                 ));
             }
             failing += 1;
