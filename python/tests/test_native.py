@@ -7,6 +7,7 @@ import json
 import subprocess
 import sys
 import threading
+import warnings
 
 import numpy as np
 import pytest
@@ -205,6 +206,11 @@ def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
     with pytest.warns(UserWarning, match="no log has rows of topic `batery_status`"):
         none = ulog.to_parquet(str(good), tmp_path / "none", topics=["batery_status"])
     assert none[0]["ok"] and none[0]["files"] == []
+    # No log converted: the errors say why, and no topic is warned of.
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        failed = ulog.to_parquet([bad], tmp_path / "failed", topics=["battery_status"])
+    assert not failed[0]["ok"]
     with pytest.raises(ValueError, match="layout"):
         ulog.to_parquet(str(good), tmp_path / "x", layout="flat")
 

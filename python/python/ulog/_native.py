@@ -215,8 +215,8 @@ def to_parquet(
     each ``metadata.json`` unless ``analysis=False``; ``topics`` names, or one name as a
     str). One dict per log, in order: ``ok`` and what it wrote (``files``, ``metadata``,
     ``log_dir``, ``notes``), or ``error``; a log that fails does not stop the others. A
-    topic of ``topics`` that no log has rows of is a warning (``UserWarning``), as
-    ``ulog parquet -m`` says it on stderr."""
+    topic of ``topics`` that no converted log has rows of is a warning (``UserWarning``),
+    as ``ulog parquet -m`` says it on stderr."""
     if isinstance(paths, (str, os.PathLike)):
         paths = [paths]
     if isinstance(topics, str):
@@ -229,7 +229,8 @@ def to_parquet(
         threads,
         analysis,
     )
-    if topics is not None:
+    if topics is not None and any(r["ok"] for r in results):
+        # (When every log failed, their errors say why; no topic is to blame.)
         written = {f["topic"] for r in results if r["ok"] for f in r["files"]}
         for topic in topics:
             if topic not in written:
