@@ -31,7 +31,8 @@ struct Line<'a> {
 /// are still analysed (as `ulog parquet` converts the others), the exit code 1 at the end.
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     let mut failed = 0;
-    let mut written = 0;
+    // Whether a text summary is already out (the next one follows a blank line).
+    let mut shown = false;
     for path in &args.files {
         let analysis = match crate::cli::open_mapped(path)
             .and_then(|file| Analysis::of_bytes(&file).map_err(|e| Failure::at(path, e)))
@@ -43,8 +44,6 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
                 continue;
             }
         };
-        let i = written;
-        written += 1;
         if args.json {
             let line = Line {
                 log: path.to_string_lossy(),
@@ -53,9 +52,10 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
             serde_json::to_writer(&mut *out, &line)?;
             writeln!(out)?;
         } else {
-            if i > 0 {
+            if shown {
                 writeln!(out)?;
             }
+            shown = true;
             writeln!(out, "{}", path.display())?;
             write!(out, "{analysis}")?;
         }

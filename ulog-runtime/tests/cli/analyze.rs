@@ -180,5 +180,18 @@ fn a_log_that_cannot_be_read_does_not_stop_the_analysis_of_the_others() {
         "{err}"
     );
     assert_eq!(lines[2], "ulog: 2 of 4 logs not analysed");
+    // The text summaries of the readable logs, one blank line between them.
+    let text_args: Vec<&str> = args.iter().copied().filter(|a| *a != "--json").collect();
+    let text = String::from_utf8(ulog(&text_args).stdout).unwrap();
+    let starts: Vec<usize> = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| *l == args[2] || *l == args[5])
+        .map(|(i, _)| i)
+        .collect();
+    assert_eq!(starts.len(), 2, "{text}");
+    assert_eq!(starts[0], 0, "{text}");
+    assert_eq!(text.lines().nth(starts[1] - 1), Some(""), "{text}");
+    assert_eq!(text.lines().filter(|l| l.is_empty()).count(), 1, "{text}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
