@@ -235,9 +235,11 @@ impl Log {
         start: Option<f64>,
         end: Option<f64>,
     ) -> PyResult<Table> {
+        let window = ulog_runtime::columns::Window::seconds(start, end)
+            .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
         let log = self.log.clone();
         let topic_name = topic.to_owned();
-        let made = py.detach(move || make_table(&log, &topic_name, multi_id, columns, start, end));
+        let made = py.detach(move || make_table(&log, &topic_name, multi_id, columns, window));
         made.map_err(|e| match e {
             TableError::Columns(e) => PyKeyError::new_err(e.to_string()),
             TableError::NoColumn(m) => PyKeyError::new_err(m),
@@ -306,8 +308,7 @@ fn make_table(
     topic: &str,
     multi_id: u8,
     columns: Option<Vec<String>>,
-    start: Option<f64>,
-    end: Option<f64>,
+    window: ulog_runtime::columns::Window,
 ) -> Result<Table, TableError> {
     let cols = log.columns(topic, multi_id).map_err(TableError::Columns)?;
     let names: Vec<String> = cols.names().map(str::to_owned).collect();
@@ -328,8 +329,8 @@ fn make_table(
             })
             .collect::<Result<_, _>>()?,
     };
-    let cols = if start.is_some() || end.is_some() {
-        cols.window(&ulog_runtime::columns::Window::seconds(start, end))
+    let cols = if window.is_bounded() {
+        cols.window(&window)
     } else {
         cols
     };

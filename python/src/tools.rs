@@ -4,14 +4,17 @@ use std::path::PathBuf;
 
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
+use ulog_runtime::columns::Window;
 use ulog_runtime::columns::parquet::{Converter, Layout, ParquetOptions};
 
 /// Converts logs to Parquet with the Rust `Converter` (what `ulog parquet` does); one dict
-/// per log, in order: `log`, `ok`, and either `files` (dicts of `path`, `topic`,
+/// per log, in order (only the rows from `start` to `end` seconds, as `ulog parquet --start
+/// --end`): `log`, `ok`, and either `files` (dicts of `path`, `topic`,
 /// `multi_id`, `rows`), `metadata`, `log_dir`, `notes`, or `error`. A log that fails does
 /// not stop the others. The GIL is released while converting.
 #[pyfunction]
-#[pyo3(signature = (paths, out_dir, layout="per-log", topics=None, threads=None, analysis=true))]
+#[pyo3(signature = (paths, out_dir, layout="per-log", topics=None, threads=None, analysis=true, start=None, end=None))]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn to_parquet<'py>(
     py: Python<'py>,
     paths: Vec<PathBuf>,
@@ -20,7 +23,11 @@ pub(crate) fn to_parquet<'py>(
     topics: Option<Vec<String>>,
     threads: Option<usize>,
     analysis: bool,
+    start: Option<f64>,
+    end: Option<f64>,
 ) -> PyResult<Bound<'py, PyList>> {
+    let window = Window::seconds(start, end)
+        .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
     let layout = match layout {
         "per-log" => Layout::PerLog,
         "hive" => Layout::Hive,
@@ -34,6 +41,7 @@ pub(crate) fn to_parquet<'py>(
         layout,
         topics: topics.unwrap_or_default(),
         analysis,
+        window,
         ..ParquetOptions::default()
     };
     let threads = threads

@@ -148,6 +148,15 @@ def test_polars_duckdb_and_pandas_take_a_table():
     for bad in (5, -1, 300):
         with pytest.raises(KeyError, match=f"has no instance {bad} \\(instances: \\[0\\]\\)"):
             log.table("vehicle_attitude", bad)
+    # A window no row could lie in is a ValueError, as `ulog csv --start --end` refuses it.
+    for start, end, says in (
+        (float("nan"), None, "start \\(NaN\\) is not a finite number"),
+        (None, float("inf"), "end \\(inf\\) is not a finite number"),
+        (end, start, "ends .* before it starts"),
+        (start, start, "ends .* before it starts"),
+    ):
+        with pytest.raises(ValueError, match=says):
+            log.table("vehicle_attitude", start=start, end=end)
     with pytest.raises(KeyError, match="did you mean `vehicle_attitude`"):
         log.table("vehicle_atitude", 300)
 
@@ -183,6 +192,7 @@ def test_the_log_says_what_the_reader_read():
 
 
 def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
+    import pyarrow as pa
     import pyarrow.parquet as pq
     from conftest import corpus_dir
 
@@ -213,6 +223,23 @@ def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
     assert not failed[0]["ok"]
     with pytest.raises(ValueError, match="layout"):
         ulog.to_parquet(str(good), tmp_path / "x", layout="flat")
+    # A window: only its rows, as `table(start=, end=)` gives them; a topic with none in
+    # it is a warning that names the window; a window no row could lie in, a ValueError
+    # before anything is written.
+    log = ulog.open(str(good))
+    ts = pa.table(log.table("battery_status"))["timestamp"].to_numpy()
+    start, end = ts[3] / 1e6, ts[9] / 1e6
+    cut = ulog.to_parquet(str(good), tmp_path / "cut", topics="battery_status", start=start, end=end)
+    written = pq.read_table(cut[0]["files"][0]["path"])["timestamp"].to_numpy()
+    assert np.array_equal(written, ts[3:9])
+    expected = pa.table(log.table("battery_status", start=start, end=end))["timestamp"].to_numpy()
+    assert np.array_equal(written, expected)
+    with pytest.warns(UserWarning, match="`battery_status` in the window before 1.0 s"):
+        early = ulog.to_parquet(str(good), tmp_path / "early", topics="battery_status", end=1.0)
+    assert early[0]["ok"] and early[0]["files"] == []
+    with pytest.raises(ValueError, match="before it starts"):
+        ulog.to_parquet(str(good), tmp_path / "never", start=end, end=start)
+    assert not (tmp_path / "never").exists()
 
 
 def test_the_command_line_tool_ships_with_the_package():

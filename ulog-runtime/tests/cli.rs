@@ -1062,3 +1062,84 @@ fn cut_and_anonymize_write_new_logs_and_say_what_they_changed() {
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--origin 91,0: expected LAT,LON"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_window_no_row_can_lie_in_is_refused_and_an_empty_one_is_named() {
+    let dir = temp_dir("window");
+    let log = snapshot_log(&dir);
+    let l = log.to_str().unwrap();
+    let o = dir.join("out");
+    let o = o.to_str().unwrap();
+    let cut = dir.join("cut.ulg");
+    let c = cut.to_str().unwrap();
+    // Refused before anything is read or written, by every verb that takes a window.
+    for (verb, output) in [("csv", o), ("parquet", o), ("cut", c)] {
+        for (bounds, says) in [
+            (
+                &["--start", "nan"][..],
+                "the window's start (NaN) is not a finite number",
+            ),
+            (
+                &["--end", "inf"][..],
+                "the window's end (inf) is not a finite number",
+            ),
+            (
+                &["--start", "3724", "--end", "3723"][..],
+                "the window ends (3723 s) before it starts (3724 s)",
+            ),
+        ] {
+            let mut args = vec![verb, l, "-o", output];
+            args.extend_from_slice(bounds);
+            let out = ulog(&args);
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+            assert!(
+                err.contains(&format!("--start/--end: {says}")),
+                "{args:?}: {err}"
+            );
+        }
+    }
+    assert!(!Path::new(o).exists() && !cut.exists(), "nothing written");
+    // A window before the log's rows (3723.0 s to 3724.0 s): each verb says so.
+    let early = ["--start", "10", "--end", "20", "-m", "esc_status"];
+    let window = "no row of the topics asked for lies in the window from 10 s to 20 s";
+    let csv = ulog(&[&["csv", l, "-o", o][..], &early[..]].concat());
+    let err = String::from_utf8_lossy(&csv.stderr);
+    assert!(csv.status.success(), "{err}");
+    assert!(
+        err.contains(&format!(
+            "{window} (the log runs from 3723 s to 3724.000001 s)"
+        )),
+        "{err}"
+    );
+    let cut_out = ulog(&[&["cut", l, "-o", c][..], &early[..]].concat());
+    let err = String::from_utf8_lossy(&cut_out.stderr);
+    assert!(cut_out.status.success(), "{err}");
+    assert!(err.contains(window), "{err}");
+    // Instances with no row written are counted in one line, not listed one by one.
+    let text = String::from_utf8_lossy(&cut_out.stdout);
+    assert!(
+        text.lines()
+            .any(|l| l == "  2 topic instances left out whole (22 rows)"),
+        "{text}"
+    );
+    assert!(!text.contains("0 of 11 rows"), "{text}");
+    let pq = ulog(&[&["parquet", l, "-o", o][..], &early[..]].concat());
+    let err = String::from_utf8_lossy(&pq.stderr);
+    assert!(
+        err.contains("no Parquet file written: no topic has rows that can be read in the window from 10 s to 20 s"),
+        "{err}"
+    );
+    assert!(
+        err.contains("no log has rows of topic `esc_status` in the window from 10 s to 20 s"),
+        "{err}"
+    );
+    // A window the rows lie in: no such note.
+    let fine = ulog(&["cut", l, "-o", c, "--start", "3723.3", "-m", "esc_status"]);
+    assert!(fine.status.success());
+    assert!(
+        !String::from_utf8_lossy(&fine.stderr).contains("lies in the window"),
+        "{fine:?}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

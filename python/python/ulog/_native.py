@@ -154,7 +154,9 @@ class Log:
     ) -> Table:
         """A topic instance's columns (only ``columns`` if given: names, or one name as a
         str), the rows from ``start`` to ``end`` seconds as ``ulog csv --start --end`` takes
-        them. KeyError (naming the closest) for a topic, instance or column the log lacks."""
+        them. KeyError (naming the closest) for a topic, instance or column the log lacks;
+        ValueError for a bound that is NaN or infinite, or an ``end`` at or before
+        ``start``."""
         if isinstance(columns, str):
             columns = [columns]
         if not 0 <= multi_id <= 255:
@@ -209,14 +211,19 @@ def to_parquet(
     topics: Optional[Sequence[str]] = None,
     threads: Optional[int] = None,
     analysis: bool = True,
+    start: Optional[float] = None,
+    end: Optional[float] = None,
 ) -> List[Dict[str, Any]]:
     """Converts logs to Parquet as ``ulog parquet`` does (``layout`` ``"per-log"`` or
     ``"hive"``, only ``topics`` if given, ``threads`` logs at once, the flight analysis in
-    each ``metadata.json`` unless ``analysis=False``; ``topics`` names, or one name as a
-    str). One dict per log, in order: ``ok`` and what it wrote (``files``, ``metadata``,
-    ``log_dir``, ``notes``), or ``error``; a log that fails does not stop the others. A
-    topic of ``topics`` that no converted log has rows of is a warning (``UserWarning``),
-    as ``ulog parquet -m`` says it on stderr."""
+    each ``metadata.json`` unless ``analysis=False``, only the rows from ``start`` to
+    ``end`` seconds as ``ulog parquet --start --end`` takes them; ``topics`` names, or one
+    name as a str). One dict per log, in order: ``ok`` and what it wrote (``files``,
+    ``metadata``, ``log_dir``, ``notes``), or ``error``; a log that fails does not stop the
+    others. A topic of ``topics`` that no converted log has rows of (in the window) is a
+    warning (``UserWarning``), as ``ulog parquet -m`` says it on stderr. ValueError, before
+    any log is read, for a bound that is NaN or infinite or an ``end`` at or before
+    ``start``."""
     if isinstance(paths, (str, os.PathLike)):
         paths = [paths]
     if isinstance(topics, str):
@@ -228,11 +235,20 @@ def to_parquet(
         list(topics) if topics is not None else None,
         threads,
         analysis,
+        start,
+        end,
     )
     if topics is not None and any(r["ok"] for r in results):
         # (When every log failed, their errors say why; no topic is to blame.)
         written = {f["topic"] for r in results if r["ok"] for f in r["files"]}
         for topic in topics:
             if topic not in written:
-                warnings.warn(f"no log has rows of topic `{topic}`", stacklevel=2)
+                window = ""
+                if start is not None and end is not None:
+                    window = f" in the window from {start} s to {end} s"
+                elif start is not None:
+                    window = f" in the window from {start} s"
+                elif end is not None:
+                    window = f" in the window before {end} s"
+                warnings.warn(f"no log has rows of topic `{topic}`{window}", stacklevel=2)
     return results

@@ -77,6 +77,8 @@ def to_parquet(
     topics: Optional[List[str]] = None,
     threads: Optional[int] = None,
     analysis: bool = True,
+    start: Optional[float] = None,
+    end: Optional[float] = None,
 ) -> List[Dict[str, Any]]: ...
 
 def cli_main(argv: List[str]) -> int: ...

@@ -3,7 +3,6 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use crate::columns::Window;
 use crate::columns::csv::{CsvOptions, export};
 
 use crate::cli::{Failure, Progress};
@@ -35,12 +34,13 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
+    let window = crate::cli::window(args.start, args.end)?;
     let log = crate::cli::open(&args.file)?;
     crate::cli::check_utf8(&log, &args.file, args.ignore)?;
     crate::cli::check_topics(&log, &args.file, &args.messages)?;
     let options = CsvOptions {
         delimiter: args.delimiter.clone(),
-        window: Window::seconds(args.start, args.end),
+        window,
     };
     let dir = match &args.output {
         Some(d) => {
@@ -71,11 +71,17 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     for f in &written {
         writeln!(out, "{} ({} rows)", f.path.display(), f.rows)?;
     }
+    if options.window.is_bounded() && !written.is_empty() && written.iter().all(|f| f.rows == 0) {
+        let start = log.header().start_timestamp;
+        let span = (start, log.metadata().last_timestamp().max(start));
+        crate::cli::report_empty_window(&args.file, &options.window, Some(span));
+    }
     crate::cli::report_skipped(
         &log.skipped(),
         &args.file,
         &args.messages,
         written.is_empty().then_some("CSV"),
+        &options.window,
     );
     Ok(())
 }

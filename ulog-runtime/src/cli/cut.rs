@@ -4,7 +4,6 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use crate::columns::Window;
 use crate::rewrite::Rewrite;
 
 use crate::cli::Failure;
@@ -32,14 +31,22 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
+    let window = crate::cli::window(args.start, args.end)?;
     crate::cli::check_path(&args.file, false)?;
     let topics: Vec<String> = args.messages.iter().chain(&args.exclude).cloned().collect();
     crate::cli::check_topics_in_files(std::slice::from_ref(&args.file), &topics)?;
     let report = Rewrite::new()
-        .window(Window::seconds(args.start, args.end))
+        .window(window)
         .topics(&args.messages)
         .exclude(&args.exclude)
         .run_file(&args.file, &args.output)
         .map_err(|e| crate::cli::rewrite_failure(&args.file, e))?;
+    let (rows_in, rows_out) = report
+        .topics
+        .iter()
+        .fold((0, 0), |(a, b), t| (a + t.rows_in, b + t.rows_out));
+    if window.is_bounded() && rows_in > 0 && rows_out == 0 {
+        crate::cli::report_empty_window(&args.file, &window, None);
+    }
     crate::cli::report_rewrite(&report, &args.output, out)
 }

@@ -203,6 +203,46 @@ pub(crate) fn report_rewrite(
     Ok(())
 }
 
+/// ` in the window from 10 s to 20 s` for a bounded window, else nothing: what a message
+/// about missing rows adds, since rows outside the window exist but were not asked for.
+pub(crate) fn in_window(window: &crate::columns::Window) -> String {
+    if window.is_bounded() {
+        format!(" in the window {window}")
+    } else {
+        String::new()
+    }
+}
+
+/// Says on stderr that rows were asked for in a window and none lay in it (the output has
+/// no rows), with the log's time span when it is known (header start to last timestamp,
+/// µs), so that an empty output is never silent.
+pub(crate) fn report_empty_window(
+    file: &Path,
+    window: &crate::columns::Window,
+    span_us: Option<(u64, u64)>,
+) {
+    let span = span_us.map_or(String::new(), |(a, b)| {
+        format!(
+            " (the log runs from {} s to {} s)",
+            a as f64 / 1e6,
+            b as f64 / 1e6
+        )
+    });
+    eprintln!(
+        "ulog: {}: no row of the topics asked for lies in the window {window}{span}",
+        file.display()
+    );
+}
+
+/// The window of `--start`/`--end`, or exit 2 saying why it cannot be one.
+pub(crate) fn window(
+    start: Option<f64>,
+    end: Option<f64>,
+) -> Result<crate::columns::Window, Failure> {
+    crate::columns::Window::seconds(start, end)
+        .map_err(|e| Failure::exit(2, format!("--start/--end: {e}")))
+}
+
 /// Opens a log, with plain messages for paths that are not readable files.
 pub(crate) fn open(path: &Path) -> Result<Log<'static>, Failure> {
     check_path(path, false)?;
@@ -344,6 +384,7 @@ pub(crate) fn report_skipped(
     file: &Path,
     topics: &[String],
     nothing_written: Option<&str>,
+    window: &crate::columns::Window,
 ) {
     let wanted = |t: &str| topics.is_empty() || topics.iter().any(|w| w == t);
     let say = |what: String| eprintln!("ulog: {}: {what}", file.display());
@@ -371,7 +412,8 @@ pub(crate) fn report_skipped(
     }
     if let Some(kind) = nothing_written {
         say(format!(
-            "no {kind} file written: no topic has rows that can be read"
+            "no {kind} file written: no topic has rows that can be read{}",
+            in_window(window)
         ));
     }
 }

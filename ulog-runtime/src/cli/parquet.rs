@@ -6,7 +6,6 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use crate::columns::Window;
 use crate::columns::parquet::{Converter, Layout, ParquetOptions};
 
 use crate::cli::Failure;
@@ -56,10 +55,11 @@ enum LayoutArg {
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
+    let window = crate::cli::window(args.start, args.end)?;
     let options = ParquetOptions {
         zstd_level: args.zstd_level,
         topics: args.messages.clone(),
-        window: Window::seconds(args.start, args.end),
+        window,
         layout: match args.layout {
             LayoutArg::PerLog => Layout::PerLog,
             LayoutArg::Hive => Layout::Hive,
@@ -121,6 +121,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
                     path,
                     &args.messages,
                     c.files.is_empty().then_some("Parquet"),
+                    &window,
                 );
                 topics_seen.extend(c.files.iter().map(|f| f.topic.clone()));
             }
@@ -135,7 +136,10 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     }
     // Topics some log defines but none has rows of (in the window).
     for topic in args.messages.iter().filter(|t| !topics_seen.contains(*t)) {
-        eprintln!("ulog: no log has rows of topic `{topic}`");
+        eprintln!(
+            "ulog: no log has rows of topic `{topic}`{}",
+            crate::cli::in_window(&window)
+        );
     }
     if failed > 0 {
         return Err(Failure::exit(

@@ -815,6 +815,19 @@ pub struct Window {
     pub end_us: Option<f64>,
 }
 
+/// `from 10 s to 20 s`, `from 10 s`, `before 20 s`, or `unbounded`: the window as a
+/// message names it.
+impl std::fmt::Display for Window {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match (self.start_us, self.end_us) {
+            (Some(s), Some(e)) => write!(f, "from {} s to {} s", s / 1e6, e / 1e6),
+            (Some(s), None) => write!(f, "from {} s", s / 1e6),
+            (None, Some(e)) => write!(f, "before {} s", e / 1e6),
+            (None, None) => f.write_str("unbounded"),
+        }
+    }
+}
+
 /// What to do with one row of a [`Window`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Admit {
@@ -826,13 +839,52 @@ pub enum Admit {
     Stop,
 }
 
+/// Why [`Window::seconds`] refuses a window.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum WindowError {
+    /// A bound is not a finite number (NaN or infinite).
+    #[error("the window's {bound} ({value}) is not a finite number of seconds")]
+    NotFinite {
+        /// `start` or `end`.
+        bound: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// The end is not after the start: no row could lie in the window.
+    #[error("the window ends ({end} s) before it starts ({start} s), so no row lies in it")]
+    Empty {
+        /// The start given, seconds.
+        start: f64,
+        /// The end given, seconds.
+        end: f64,
+    },
+}
+
 impl Window {
-    /// A window from `start` to `end` seconds.
-    pub fn seconds(start: Option<f64>, end: Option<f64>) -> Window {
-        Window {
+    /// A window from `start` to `end` seconds of log time (µs timestamps / 1e6), either
+    /// bound absent for none; an error for a bound that is NaN or infinite and for an end
+    /// at or before the start.
+    pub fn seconds(start: Option<f64>, end: Option<f64>) -> Result<Window, WindowError> {
+        for (bound, value) in [("start", start), ("end", end)] {
+            if let Some(value) = value.filter(|v| !v.is_finite()) {
+                return Err(WindowError::NotFinite { bound, value });
+            }
+        }
+        if let (Some(start), Some(end)) = (start, end)
+            && end <= start
+        {
+            return Err(WindowError::Empty { start, end });
+        }
+        Ok(Window {
             start_us: start.map(|s| s * 1e6),
             end_us: end.map(|s| s * 1e6),
-        }
+        })
+    }
+
+    /// Whether the window has a bound (a default window takes every row).
+    pub fn is_bounded(&self) -> bool {
+        self.start_us.is_some() || self.end_us.is_some()
     }
 
     /// Whether to take the next row of one topic instance, given whether an earlier row of

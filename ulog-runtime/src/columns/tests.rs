@@ -448,3 +448,55 @@ fn a_text_of_no_length_as_the_only_field_gives_an_empty_string_a_row() {
     assert_eq!(cols.get("s").unwrap().as_text().unwrap(), ["", "", ""]);
     assert_eq!(batch.columns(), cols);
 }
+
+#[test]
+fn a_window_refuses_bounds_no_row_could_lie_between() {
+    let nan = Window::seconds(Some(f64::NAN), None).unwrap_err();
+    assert!(
+        matches!(nan, WindowError::NotFinite { bound: "start", .. }),
+        "{nan:?}"
+    );
+    let inf = Window::seconds(Some(1.0), Some(f64::INFINITY)).unwrap_err();
+    assert!(
+        matches!(inf, WindowError::NotFinite { bound: "end", .. }),
+        "{inf:?}"
+    );
+    assert_eq!(
+        Window::seconds(Some(30.0), Some(20.0)),
+        Err(WindowError::Empty {
+            start: 30.0,
+            end: 20.0
+        })
+    );
+    assert_eq!(
+        Window::seconds(Some(5.0), Some(5.0)),
+        Err(WindowError::Empty {
+            start: 5.0,
+            end: 5.0
+        })
+    );
+    assert_eq!(
+        Window::seconds(Some(30.0), Some(20.0))
+            .unwrap_err()
+            .to_string(),
+        "the window ends (20 s) before it starts (30 s), so no row lies in it"
+    );
+    let w = Window::seconds(Some(1.5), Some(2.0)).unwrap();
+    assert_eq!(
+        (w.start_us, w.end_us),
+        (Some(1_500_000.0), Some(2_000_000.0))
+    );
+    assert_eq!(w.to_string(), "from 1.5 s to 2 s");
+    assert_eq!(
+        Window::seconds(None, Some(2.0)).unwrap().to_string(),
+        "before 2 s"
+    );
+    assert_eq!(
+        Window::seconds(Some(-1.0), None).unwrap().to_string(),
+        "from -1 s"
+    );
+    let open = Window::seconds(None, None).unwrap();
+    assert!(!open.is_bounded());
+    assert_eq!(open, Window::default());
+    assert!(w.is_bounded());
+}

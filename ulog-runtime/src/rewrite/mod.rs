@@ -26,7 +26,7 @@
 //!
 //! let mut cut = Vec::new();
 //! let report = Rewrite::new()
-//!     .window(Window::seconds(Some(2.0), Some(5.0)))
+//!     .window(Window::seconds(Some(2.0), Some(5.0))?)
 //!     .run(&input[..], &mut cut)?;
 //! assert_eq!(report.topics[0].rows_out, 3);
 //! let log = Log::from_vec(cut)?;
@@ -1113,10 +1113,21 @@ impl std::fmt::Display for Report {
             "rows: {rows_out} of {rows_in} written, {} topic instances",
             self.topics.len()
         )?;
+        // One line per instance partly written or changed; those left out whole are
+        // counted in one line (and named under "subscriptions not written").
+        let (mut none, mut none_rows) = (0, 0);
         for t in self
             .topics
             .iter()
-            .filter(|t| t.rows_out != t.rows_in || t.rows_changed > 0)
+            .filter(|t| t.rows_out == 0 && t.rows_in > 0)
+        {
+            none += 1;
+            none_rows += t.rows_in;
+        }
+        for t in self
+            .topics
+            .iter()
+            .filter(|t| (t.rows_out > 0 && t.rows_out != t.rows_in) || t.rows_changed > 0)
         {
             write!(
                 f,
@@ -1127,6 +1138,13 @@ impl std::fmt::Display for Report {
                 write!(f, ", {} changed", t.rows_changed)?;
             }
             writeln!(f)?;
+        }
+        if none > 0 {
+            writeln!(
+                f,
+                "  {none} topic instance{} left out whole ({none_rows} rows)",
+                if none == 1 { "" } else { "s" }
+            )?;
         }
         if !self.subscriptions_dropped.is_empty() {
             let subs: Vec<String> = self

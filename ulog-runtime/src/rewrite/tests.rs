@@ -166,7 +166,7 @@ fn without_rules_a_log_comes_out_byte_for_byte() {
 fn a_window_keeps_its_rows_strings_and_changes_and_the_parameters_in_force() {
     let input = flight();
     let (out, report) = rewrite(
-        Rewrite::new().window(Window::seconds(Some(3.0), Some(6.0))),
+        Rewrite::new().window(Window::seconds(Some(3.0), Some(6.0)).unwrap()),
         &input,
     );
     let log = Log::from_vec(out).unwrap();

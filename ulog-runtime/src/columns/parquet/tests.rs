@@ -445,7 +445,7 @@ fn a_new_conversion_of_a_log_replaces_the_files_of_the_earlier_one() {
     let late = Converter::new(
         &root,
         ParquetOptions {
-            window: Window::seconds(Some(1.0), None),
+            window: Window::seconds(Some(1.0), None).unwrap(),
             ..ParquetOptions::default()
         },
     );
