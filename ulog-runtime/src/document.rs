@@ -19,7 +19,9 @@ pub struct LogFacts {
     pub version: u8,
     /// The header's start time, µs.
     pub start_timestamp: u64,
-    /// The start time as a UTC date, when the header holds an absolute time.
+    /// The start time as a UTC date: the header's when it holds an absolute time, else from
+    /// the first GPS fix ([`crate::read::GpsClock`]), else none. The same date as the
+    /// Parquet files' `ulog.start_utc` and `metadata.json`'s `log.start_utc`.
     pub start_utc: Option<String>,
     /// The firmware version as pyulog gives it (`v1.15.1`), if a release.
     pub software_version: Option<String>,
@@ -196,6 +198,9 @@ pub struct Collected<'a> {
     pub topics: &'a [TopicSummary],
     /// What was left out.
     pub skipped: &'a Skipped,
+    /// The log's start in UTC from its first GPS fix (µs since 1970), if one was seen
+    /// ([`crate::read::GpsClock`]): the date when the header holds none.
+    pub gps_utc_start: Option<u64>,
 }
 
 impl LogFacts {
@@ -213,6 +218,7 @@ impl LogFacts {
                 diagnostics_omitted: 0,
                 topics: &topics,
                 skipped: &skipped,
+                gps_utc_start: crate::read::GpsClock::of_log(log),
             },
         )
     }
@@ -230,7 +236,10 @@ impl LogFacts {
         LogFacts {
             version: header.version,
             start_timestamp: header.start_timestamp,
-            start_utc: header.start_utc().map(|t| t.to_string()),
+            start_utc: header
+                .start_utc()
+                .or_else(|| c.gps_utc_start.map(crate::read::UtcTime::from_unix_us))
+                .map(|t| t.to_string()),
             software_version: meta.software_version(),
             flag_bits: meta.flag_bits().map(|b: &FlagBits| FlagBitsFact {
                 compat: b.compat,

@@ -905,7 +905,7 @@ fn csv_file_names_stay_in_the_folder_and_never_collide_silently() {
 }
 
 #[test]
-fn csv_says_what_it_skips() {
+fn csv_and_json_say_what_they_skip() {
     use ulog_runtime::read::{FileHeader, FlagBits, Message};
     let mut bytes = FileHeader {
         version: 1,
@@ -954,6 +954,34 @@ fn csv_says_what_it_skips() {
              ulog: {l}: skipped 1 row of msg_ids no subscription declares\n\
              ulog: {l}: no CSV file written: no topic has rows that can be read\n"
         )
+    );
+    // `ulog json` says the same of what its rows lack, in both forms, and so does a file
+    // cut short in a message (the 10 bytes left of its last 13-byte message are damage).
+    let skips = format!(
+        "ulog: {l}: skipped topic `a` (msg_id 0): a.m: type `missing_type` is not a basic type and no format defines it\n\
+         ulog: {l}: skipped topic `undefined` (msg_id 1): no format named `undefined`\n\
+         ulog: {l}: skipped 1 row of msg_ids no subscription declares\n"
+    );
+    for document in [false, true] {
+        let mut args = vec!["json", log.to_str().unwrap()];
+        if document {
+            args.push("--document");
+        }
+        let out = ulog(&args);
+        assert!(out.status.success());
+        assert_eq!(String::from_utf8(out.stderr).unwrap(), skips, "{args:?}");
+    }
+    let cut = dir.join("cut.ulg");
+    std::fs::write(&cut, &bytes[..bytes.len() - 3]).unwrap();
+    let out = ulog(&["json", cut.to_str().unwrap()]);
+    assert!(out.status.success());
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        err.contains(&format!(
+            "ulog: {}: 10 damaged bytes skipped",
+            cut.display()
+        )),
+        "{err}"
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }

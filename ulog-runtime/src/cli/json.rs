@@ -37,6 +37,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     if args.document {
         serde_json::to_writer_pretty(&mut *out, &Document::new(&log, &args.messages))?;
         out.write_all(b"\n")?;
+        report_skipped(&log, args);
         return Ok(());
     }
     let wanted = |s: &Subscription| args.messages.is_empty() || args.messages.contains(&s.name);
@@ -53,7 +54,20 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         serde_json::to_writer(&mut *out, &line)?;
         out.write_all(b"\n")?;
     }
+    report_skipped(&log, args);
     Ok(())
+}
+
+/// What the output lacks of the file (damage, unreadable topics, rows that do not fit), on
+/// stderr as the other exports say it; the document also holds it under `skipped`.
+fn report_skipped(log: &Log<'_>, args: &Args) {
+    crate::cli::report_skipped(
+        &log.skipped(),
+        &args.file,
+        &args.messages,
+        None,
+        &crate::columns::Window::default(),
+    );
 }
 
 /// One row of the JSON Lines output.

@@ -3,6 +3,7 @@
 //! recovery) and one interpreter ([`Metadata`]).
 
 mod framer;
+mod gps_clock;
 mod log;
 #[cfg(feature = "mmap")]
 mod mapped;
@@ -12,6 +13,7 @@ mod stream;
 mod threads;
 mod topics;
 
+pub use gps_clock::GpsClock;
 pub use log::{DataRows, Log, Rows, Summary, fold_rows, fold_rows_on, summarize};
 pub(crate) use log::{RowVisitor, all_cores, visit_rows};
 #[cfg(feature = "mmap")]

@@ -16,11 +16,12 @@ use sha2::Digest;
 
 use super::encode::{Encoder, Output, TableWork};
 use super::fleet::TablePlace;
-use super::{Admission, AdmitRow, GpsClock, LogIdentity, ParquetOptions, Table, TableWritten};
+use super::{Admission, AdmitRow, LogIdentity, ParquetOptions, Table, TableWritten};
 use crate::analysis::{Analysis, Analyzer, ColumnStats};
 use crate::columns::{ColumnSpec, RowBatch};
 use crate::document::{Collected, KEPT_DIAGNOSTICS, LogFacts};
 use crate::file_names::FileNames;
+use crate::read::GpsClock;
 use crate::read::{Dropout, LoggedMessage, ParameterChange, Row, Skipped, TopicSummary};
 use crate::{Diagnostic, Event, ReadError, StreamReader};
 
@@ -847,6 +848,7 @@ impl<'c> Pass<'c> {
                 diagnostics_omitted: self.diagnostics_omitted,
                 topics: &topics,
                 skipped: &self.skipped,
+                gps_utc_start: self.clock.start(),
             },
         );
         let metadata = self.converter.options.layout.metadata_path(&root, &log_dir);

@@ -45,9 +45,8 @@ pub use convert::{Conversion, ConvertError, Converter, WrittenFile};
 pub use fleet::Layout;
 
 use super::{ColumnBuilder, ColumnSpec, Columns, Window};
-use crate::read::{Log, Metadata, Row, Subscription};
-
-use crate::schema::{FieldKind, Primitive, Schema};
+pub use crate::read::GpsClock;
+use crate::read::{Log, Metadata};
 
 /// How Parquet files are written.
 #[derive(Debug, Clone, PartialEq)]
@@ -209,20 +208,7 @@ impl LogIdentity {
     pub fn of_log(log: &Log<'_>, file_name: &str) -> LogIdentity {
         use sha2::Digest;
         let digest = sha2::Sha256::digest(log.bytes());
-        let mut clock = GpsClock::new(log.metadata().header().start_timestamp);
-        for sub in log.subscriptions() {
-            if clock.start().is_some() {
-                break;
-            }
-            if let Some(at) = GpsClock::field(log.metadata().schema(), sub) {
-                for row in log.rows(sub) {
-                    if clock.watch(&row, at) {
-                        break;
-                    }
-                }
-            }
-        }
-        LogIdentity::new(log.metadata(), file_name, &digest, clock.start())
+        LogIdentity::new(log.metadata(), file_name, &digest, GpsClock::of_log(log))
     }
 
     /// The key-value metadata that says which log a table comes from.
@@ -256,66 +242,6 @@ fn table_key_values(topic: &str, multi_id: u8, format: &str) -> Vec<KeyValue> {
         KeyValue::new("ulog.multi_id".to_owned(), multi_id.to_string()),
         KeyValue::new("ulog.format".to_owned(), format.to_owned()),
     ]
-}
-
-/// The UTC time of a log's start from its first GPS fix: `time_utc_usec` of
-/// `vehicle_gps_position` or `sensor_gps`, less the time from the log's start to that row.
-#[derive(Debug, Clone, Copy)]
-pub struct GpsClock {
-    log_start: u64,
-    start: Option<u64>,
-}
-
-impl GpsClock {
-    /// Topics whose `time_utc_usec` is read.
-    pub const TOPICS: [&str; 2] = ["vehicle_gps_position", "sensor_gps"];
-
-    /// A clock for a log whose header says it started at `log_start` µs.
-    pub fn new(log_start: u64) -> GpsClock {
-        GpsClock {
-            log_start,
-            start: None,
-        }
-    }
-
-    /// The offset of the `uint64_t time_utc_usec` field of a subscription's rows, if it is
-    /// one of [`GpsClock::TOPICS`] and has one.
-    pub fn field(schema: &Schema, sub: &Subscription) -> Option<usize> {
-        if !GpsClock::TOPICS.contains(&sub.name.as_str()) {
-            return None;
-        }
-        let layout = schema.resolved(sub.format()?)?;
-        layout
-            .fields
-            .iter()
-            .find(|f| {
-                f.name == "time_utc_usec"
-                    && f.array_len.is_none()
-                    && f.kind == FieldKind::Primitive(Primitive::UInt64)
-            })
-            .map(|f| f.offset)
-    }
-
-    /// Reads a row whose `time_utc_usec` is at `at`; returns whether the clock is set.
-    pub fn watch(&mut self, row: &Row<'_>, at: usize) -> bool {
-        // 2000-01-01 in µs: a GPS without a fix reports 0.
-        const Y2000_US: u64 = 946_684_800_000_000;
-        if self.start.is_none()
-            && let Some(b) = row.data.get(at..at + 8)
-        {
-            let utc = u64::from_le_bytes(b.try_into().expect("8 bytes"));
-            if utc >= Y2000_US {
-                let since_start = row.timestamp.saturating_sub(self.log_start);
-                self.start = Some(utc.saturating_sub(since_start));
-            }
-        }
-        self.start.is_some()
-    }
-
-    /// The log's start in UTC, µs since 1970, once a fix was seen.
-    pub fn start(&self) -> Option<u64> {
-        self.start
-    }
 }
 
 /// What was written of one table.

@@ -572,6 +572,16 @@ fn the_start_date_comes_from_the_header_or_the_first_gps_fix() {
         .unwrap();
     let (_, kv, _) = read(&conv.files[0].path);
     assert_eq!(kv["ulog.start_utc"], "2024-03-18 14:49:07.000000 UTC");
+    // metadata.json gives the same date twice: the log's identity and its facts (which
+    // gave none from a header without a date), and so does a whole-file log's facts.
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&conv.metadata).unwrap()).unwrap();
+    assert_eq!(meta["log"]["start_utc"], "2024-03-18 14:49:07.000000 UTC");
+    assert_eq!(meta["start_utc"], "2024-03-18 14:49:07.000000 UTC");
+    assert_eq!(
+        crate::document::LogFacts::of_log(&log).start_utc.as_deref(),
+        Some("2024-03-18 14:49:07.000000 UTC")
+    );
     std::fs::remove_dir_all(&root).unwrap();
 }
 

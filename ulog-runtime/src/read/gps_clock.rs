@@ -1,0 +1,85 @@
+//! The UTC date of a log's start from its first GPS fix, for logs whose header holds a time
+//! since boot ([`GpsClock`]): what `metadata.json`, `ulog json` and the Parquet files'
+//! `ulog.start_utc` give when the header has no date.
+
+use crate::read::{Log, Row, Subscription};
+use crate::schema::{FieldKind, Primitive, Schema};
+
+/// The UTC time of a log's start from its first GPS fix: `time_utc_usec` of
+/// `vehicle_gps_position` or `sensor_gps`, less the time from the log's start to that row.
+#[derive(Debug, Clone, Copy)]
+pub struct GpsClock {
+    log_start: u64,
+    start: Option<u64>,
+}
+
+impl GpsClock {
+    /// Topics whose `time_utc_usec` is read.
+    pub const TOPICS: [&str; 2] = ["vehicle_gps_position", "sensor_gps"];
+
+    /// A clock for a log whose header says it started at `log_start` µs.
+    pub fn new(log_start: u64) -> GpsClock {
+        GpsClock {
+            log_start,
+            start: None,
+        }
+    }
+
+    /// The offset of the `uint64_t time_utc_usec` field of a subscription's rows, if it is
+    /// one of [`GpsClock::TOPICS`] and has one.
+    pub fn field(schema: &Schema, sub: &Subscription) -> Option<usize> {
+        if !GpsClock::TOPICS.contains(&sub.name.as_str()) {
+            return None;
+        }
+        let layout = schema.resolved(sub.format()?)?;
+        layout
+            .fields
+            .iter()
+            .find(|f| {
+                f.name == "time_utc_usec"
+                    && f.array_len.is_none()
+                    && f.kind == FieldKind::Primitive(Primitive::UInt64)
+            })
+            .map(|f| f.offset)
+    }
+
+    /// Reads a row whose `time_utc_usec` is at `at`; returns whether the clock is set.
+    pub fn watch(&mut self, row: &Row<'_>, at: usize) -> bool {
+        // 2000-01-01 in µs: a GPS without a fix reports 0.
+        const Y2000_US: u64 = 946_684_800_000_000;
+        if self.start.is_none()
+            && let Some(b) = row.data.get(at..at + 8)
+        {
+            let utc = u64::from_le_bytes(b.try_into().expect("8 bytes"));
+            if utc >= Y2000_US {
+                let since_start = row.timestamp.saturating_sub(self.log_start);
+                self.start = Some(utc.saturating_sub(since_start));
+            }
+        }
+        self.start.is_some()
+    }
+
+    /// The log's start in UTC, µs since 1970, once a fix was seen.
+    pub fn start(&self) -> Option<u64> {
+        self.start
+    }
+
+    /// The start of a whole-file log in UTC from its first GPS fix (µs since 1970), reading
+    /// the GPS topics' rows up to that fix; `None` when no row has one.
+    pub fn of_log(log: &Log<'_>) -> Option<u64> {
+        let mut clock = GpsClock::new(log.metadata().header().start_timestamp);
+        for sub in log.subscriptions() {
+            if clock.start().is_some() {
+                break;
+            }
+            if let Some(at) = GpsClock::field(log.metadata().schema(), sub) {
+                for row in log.rows(sub) {
+                    if clock.watch(&row, at) {
+                        break;
+                    }
+                }
+            }
+        }
+        clock.start()
+    }
+}
