@@ -2,6 +2,7 @@
 copy) equal to pyulog's columns, the log's metadata, Parquet, the command-line tool, and
 threads reading at once."""
 
+import inspect
 import io
 import json
 import subprocess
@@ -268,3 +269,11 @@ def test_threads_read_logs_at_once(corpus_log):
     for t in threads:
         t.join(timeout=120)
     assert all(r == results[0] for r in results)
+
+
+def test_the_package_shows_only_its_public_names():
+    # What `dir(ulog)` and tab completion show is what `__all__` promises (submodules
+    # aside), and every name of `__all__` is there.
+    public = {n for n in dir(ulog) if not n.startswith("_") and not inspect.ismodule(getattr(ulog, n))}
+    assert public == {n for n in ulog.__all__ if not n.startswith("_")}
+    assert all(hasattr(ulog, n) for n in ulog.__all__)

@@ -11,8 +11,6 @@
 - The ``ulog`` command-line tool (``python -m ulog``).
 """
 
-from __future__ import annotations
-
 from ._native import Log, Table, open, to_parquet
 from ._pyulog import ULog
 from ._ulog import NotAULogError, ULogError, ULogIOError, UnsupportedFlagError, __version__

@@ -38,9 +38,13 @@ class ULog:
     methods; see pyulog's documentation). ``recover=True`` keeps every row the Rust reader
     recovers (intact rows pyulog's recovery loses in a damaged file), the rest as pyulog."""
 
+    #: The 7 magic bytes every ULog file starts with (its version byte follows), as pyulog's.
     HEADER_BYTES = b"ULog\x01\x12\x35"
+    #: The payload of an ``S`` (sync) message, as pyulog's.
     SYNC_BYTES = b"\x2F\x73\x13\x20\x25\x0C\xBB\x12"
 
+    # pyulog's names for the message types: the type byte of each message's header (the
+    # spec's ``msg_type``), e.g. ``MSG_TYPE_DATA == ord("D")``.
     MSG_TYPE_FORMAT = ord("F")
     MSG_TYPE_DATA = ord("D")
     MSG_TYPE_INFO = ord("I")
