@@ -4,6 +4,10 @@ use std::fmt;
 
 use super::{Analysis, Motion};
 
+/// Armed and in-air intervals listed one by one up to this many; beyond, the first three,
+/// the last two and the count.
+const SHOWN_INTERVALS: usize = 6;
+
 fn opt(v: Option<f64>, unit: &str) -> String {
     v.map_or_else(
         || "-".to_owned(),
@@ -57,10 +61,24 @@ impl fmt::Display for Analysis {
             )?;
         }
         let intervals = |v: &[super::Interval]| {
-            v.iter()
-                .map(|i| format!("{:.1}-{:.1} s", secs(i.start_us), secs(i.end_us)))
-                .collect::<Vec<_>>()
-                .join(", ")
+            let list = |v: &[super::Interval]| {
+                v.iter()
+                    .map(|i| format!("{:.1}-{:.1} s", secs(i.start_us), secs(i.end_us)))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            // A long log of many flights: the first and last ones, and how many in all.
+            if v.len() <= SHOWN_INTERVALS {
+                return list(v);
+            }
+            let total: u64 = v.iter().map(|i| i.end_us.saturating_sub(i.start_us)).sum();
+            format!(
+                "{}, ..., {} ({} intervals, {:.1} s in all; --json lists each)",
+                list(&v[..3]),
+                list(&v[v.len() - 2..]),
+                v.len(),
+                secs(total)
+            )
         };
         writeln!(
             f,
@@ -154,5 +172,51 @@ impl fmt::Display for Analysis {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{Analysis, Interval};
+
+    fn intervals(n: u64) -> Vec<Interval> {
+        (0..n)
+            .map(|k| Interval {
+                start_us: k * 10_000_000,
+                end_us: k * 10_000_000 + 2_000_000,
+            })
+            .collect()
+    }
+
+    fn line<'a>(text: &'a str, head: &str) -> &'a str {
+        text.lines().find(|l| l.starts_with(head)).unwrap()
+    }
+
+    #[test]
+    fn many_intervals_are_summed_up_and_a_few_listed_whole() {
+        let few = Analysis {
+            armed: intervals(6),
+            ..Analysis::default()
+        };
+        assert_eq!(
+            line(&few.to_string(), "Armed: "),
+            "Armed: 0.0-2.0 s, 10.0-12.0 s, 20.0-22.0 s, 30.0-32.0 s, 40.0-42.0 s, 50.0-52.0 s"
+        );
+        let many = Analysis {
+            armed: intervals(47),
+            flights: intervals(7),
+            ..Analysis::default()
+        };
+        let text = many.to_string();
+        assert_eq!(
+            line(&text, "Armed: "),
+            "Armed: 0.0-2.0 s, 10.0-12.0 s, 20.0-22.0 s, ..., 450.0-452.0 s, 460.0-462.0 s \
+             (47 intervals, 94.0 s in all; --json lists each)"
+        );
+        assert_eq!(
+            line(&text, "In the air: "),
+            "In the air: 0.0-2.0 s, 10.0-12.0 s, 20.0-22.0 s, ..., 50.0-52.0 s, 60.0-62.0 s \
+             (7 intervals, 14.0 s in all; --json lists each)"
+        );
     }
 }
