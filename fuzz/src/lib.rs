@@ -656,10 +656,11 @@ pub fn rewrite(data: &[u8]) {
         .expect("the rewritten log rewrites");
     assert!(again == out, "a rewritten log rewrites to itself");
     let seed = data.get(20).copied().unwrap_or(0);
-    let window = ulog_runtime::columns::Window {
-        start_us: Some(f64::from(seed) * 1e5),
-        end_us: Some(f64::from(seed) * 1e5 + 5e6),
-    };
+    let window = ulog_runtime::columns::Window::seconds(
+        Some(f64::from(seed) * 0.1),
+        Some(f64::from(seed) * 0.1 + 5.0),
+    )
+    .expect("a window of 5 s");
     for mut rules in [
         Rewrite::new().window(window),
         Rewrite::new().exclude(&[input
@@ -670,7 +671,8 @@ pub fn rewrite(data: &[u8]) {
     ] {
         let mut out = Vec::new();
         match rules.run(data, &mut out) {
-            Ok(_) => {}
+            // What `ulog cut` prints of it.
+            Ok(report) => assert!(report.to_string().contains(" bytes read, ")),
             // A sentence whose moved altitude no longer fits its message: refused.
             Err(ulog_runtime::rewrite::RewriteError::TooLarge(_)) => continue,
             Err(e) => panic!("what reads once, rewrites: {e}"),

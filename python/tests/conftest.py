@@ -38,3 +38,32 @@ def pytest_generate_tests(metafunc):
 @pytest.fixture
 def fuzz_regressions() -> Path:
     return ROOT / "tests" / "fuzz_regressions"
+
+
+def pyulog_start_utc(path):
+    """A log's start as UTC text, from pyulog's reading of it (an independent reference for
+    ``ulog``'s ``start_utc``): the header's time when it is a date (2000 or later); else the
+    first row of the first GPS dataset (``vehicle_gps_position``/``sensor_gps``, in the
+    file's order of subscriptions) whose ``time_utc_usec`` is from 2000 to 2100, less that
+    row's time since the log's start; else None."""
+    import datetime
+
+    import pyulog
+
+    y2000, y2100 = 946_684_800_000_000, 4_102_444_800_000_000
+
+    def text(us):
+        d = datetime.datetime(1970, 1, 1) + datetime.timedelta(microseconds=int(us))
+        return d.strftime("%Y-%m-%d %H:%M:%S.%f") + " UTC"
+
+    u = pyulog.ULog(str(path), ["vehicle_gps_position", "sensor_gps"])
+    if u.start_timestamp >= y2000:
+        return text(u.start_timestamp)
+    for d in sorted(u.data_list, key=lambda d: d.msg_id):
+        utc = d.data.get("time_utc_usec")
+        if utc is None or str(utc.dtype) != "uint64":
+            continue
+        for ts, t in zip(d.data["timestamp"], utc):
+            if y2000 <= int(t) < y2100:
+                return text(int(t) - max(int(ts) - u.start_timestamp, 0))
+    return None

@@ -153,8 +153,8 @@ def test_polars_duckdb_and_pandas_take_a_table():
     for start, end, says in (
         (float("nan"), None, "start \\(NaN\\) is not a finite number"),
         (None, float("inf"), "end \\(inf\\) is not a finite number"),
-        (end, start, "ends .* before it starts"),
-        (start, start, "ends .* before it starts"),
+        (end, start, "ends .* at or before its start"),
+        (start, start, "ends .* at or before its start"),
     ):
         with pytest.raises(ValueError, match=says):
             log.table("vehicle_attitude", start=start, end=end)
@@ -238,7 +238,7 @@ def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
     with pytest.warns(UserWarning, match="`battery_status` in the window before 1.0 s"):
         early = ulog.to_parquet(str(good), tmp_path / "early", topics="battery_status", end=1.0)
     assert early[0]["ok"] and early[0]["files"] == []
-    with pytest.raises(ValueError, match="before it starts"):
+    with pytest.raises(ValueError, match="at or before its start"):
         ulog.to_parquet(str(good), tmp_path / "never", start=end, end=start)
     assert not (tmp_path / "never").exists()
 
@@ -277,3 +277,18 @@ def test_the_package_shows_only_its_public_names():
     public = {n for n in dir(ulog) if not n.startswith("_") and not inspect.ismodule(getattr(ulog, n))}
     assert public == {n for n in ulog.__all__ if not n.startswith("_")}
     assert all(hasattr(ulog, n) for n in ulog.__all__)
+
+
+def test_the_start_date_is_the_headers_or_the_first_gps_fixs(capsys):
+    from conftest import corpus_files, pyulog_start_utc
+
+    dated = 0
+    for path in corpus_files():
+        log = ulog.open(str(path))
+        expected = pyulog_start_utc(path)
+        capsys.readouterr()
+        assert log.start_utc == expected, path.name
+        if log.header["start_utc"] is None and expected is not None:
+            dated += 1
+    if corpus_files():
+        assert dated > 0, "some corpus log is dated by its GPS alone"

@@ -11,7 +11,7 @@ import pyulog
 
 import ulog
 import ulog.spark
-from conftest import corpus_files, under_ci
+from conftest import corpus_files, pyulog_start_utc, under_ci
 
 TOPICS = ["vehicle_attitude", "battery_status", "sensor_combined", "vehicle_local_position"]
 # A numeric field each topic has in every PX4 version of the corpus.
@@ -79,6 +79,7 @@ def test_the_corpus_on_spark_equals_pyulog_and_ulog_parquet(spark, tmp_path, cap
         u = pyulog.ULog(str(p), [])
         capsys.readouterr()
         assert r["start_timestamp"] == u.start_timestamp
+        assert r["start_utc"] == pyulog_start_utc(p), p.name
         assert r["sys_name"] == (u.msg_info_dict.get("sys_name") if isinstance(u.msg_info_dict.get("sys_name"), str) else None)
         assert "flight_modes" in json.loads(r["analysis"])
 

@@ -1113,7 +1113,7 @@ fn a_window_no_row_can_lie_in_is_refused_and_an_empty_one_is_named() {
             ),
             (
                 &["--start", "3724", "--end", "3723"][..],
-                "the window ends (3723 s) before it starts (3724 s)",
+                "the window ends (3723 s) at or before its start (3724 s)",
             ),
         ] {
             let mut args = vec![verb, l, "-o", output];
@@ -1136,7 +1136,7 @@ fn a_window_no_row_can_lie_in_is_refused_and_an_empty_one_is_named() {
     assert!(csv.status.success(), "{err}");
     assert!(
         err.contains(&format!(
-            "{window} (the log runs from 3723 s to 3724.000001 s)"
+            "{window} (the log's rows run from 3723 s to 3724.000001 s)"
         )),
         "{err}"
     );
@@ -1160,6 +1160,14 @@ fn a_window_no_row_can_lie_in_is_refused_and_an_empty_one_is_named() {
     );
     assert!(
         err.contains("no log has rows of topic `esc_status` in the window from 10 s to 20 s"),
+        "{err}"
+    );
+    // Negative bounds are numbers, not options.
+    let neg = ulog(&["cut", l, "-o", c, "--start", "-1", "--end", "-0.5"]);
+    let err = String::from_utf8_lossy(&neg.stderr);
+    assert!(neg.status.success(), "{err}");
+    assert!(
+        err.contains("no row of the topics asked for lies in the window from -1 s to -0.5 s"),
         "{err}"
     );
     // A window the rows lie in: no such note.

@@ -87,8 +87,17 @@ class Log:
 
     @property
     def header(self) -> Dict[str, Any]:
-        """``version``, ``start_timestamp`` (µs), ``start_utc`` (text, or None)."""
+        """``version``, ``start_timestamp`` (µs), ``start_utc`` (text when the header holds a
+        date, else None; ``Log.start_utc`` falls back to the first GPS fix)."""
         return self._native.header
+
+    @property
+    def start_utc(self) -> Optional[str]:
+        """The log's start as UTC text (``2021-04-21 06:30:58.437779 UTC``): the header's date
+        when it holds one (``header["start_utc"]``), else from the first GPS fix, as
+        ``metadata.json``'s ``start_utc`` and the Parquet files' ``ulog.start_utc``; else
+        None."""
+        return self._native.start_utc
 
     @property
     def info(self) -> Dict[str, Any]:

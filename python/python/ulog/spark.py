@@ -184,7 +184,7 @@ def metadata(spark, files):
                     text = lambda k: info[k] if isinstance(info.get(k), str) else None  # noqa: E731
                     row["sys_name"], row["ver_sw"], row["ver_hw"] = text("sys_name"), text("ver_sw"), text("ver_hw")
                     row["start_timestamp"] = log.header["start_timestamp"]
-                    row["start_utc"] = log.header["start_utc"]
+                    row["start_utc"] = log.start_utc
                     ts = [t for t in log.topics()]
                     first = [t["first_timestamp"] for t in ts if t["first_timestamp"] is not None]
                     last = [t["last_timestamp"] for t in ts if t["last_timestamp"] is not None]

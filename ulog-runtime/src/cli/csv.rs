@@ -22,10 +22,10 @@ pub(crate) struct Args {
     #[arg(short, long, default_value = ",")]
     delimiter: String,
     /// Only rows from this time on, in seconds (pyulog's `-ts`, `--time_s`).
-    #[arg(long, alias = "time_s")]
+    #[arg(long, alias = "time_s", allow_negative_numbers = true)]
     start: Option<f64>,
     /// Only rows before this time, in seconds (pyulog's `-te`, `--time_e`).
-    #[arg(long, alias = "time_e")]
+    #[arg(long, alias = "time_e", allow_negative_numbers = true)]
     end: Option<f64>,
     /// Leave out bytes of text that are not UTF-8 (pyulog's `-i`); without it such text is
     /// an error.
@@ -72,9 +72,11 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         writeln!(out, "{} ({} rows)", f.path.display(), f.rows)?;
     }
     if options.window.is_bounded() && !written.is_empty() && written.iter().all(|f| f.rows == 0) {
-        let start = log.header().start_timestamp;
-        let span = (start, log.metadata().last_timestamp().max(start));
-        crate::cli::report_empty_window(&args.file, &options.window, Some(span));
+        // Where the rows lie (the header's start can be later than the first row).
+        let topics = log.topics();
+        let first = topics.iter().filter_map(|t| t.first_timestamp).min();
+        let last = topics.iter().filter_map(|t| t.last_timestamp).max();
+        crate::cli::report_empty_window(&args.file, &options.window, first.zip(last));
     }
     crate::cli::report_skipped(
         &log.skipped(),

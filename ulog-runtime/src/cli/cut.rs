@@ -17,10 +17,10 @@ pub(crate) struct Args {
     #[arg(short, long)]
     output: PathBuf,
     /// Only what lies from this time on, in seconds of log time (as `ulog csv`).
-    #[arg(long, alias = "time_s")]
+    #[arg(long, alias = "time_s", allow_negative_numbers = true)]
     start: Option<f64>,
     /// Only what lies before this time, in seconds.
-    #[arg(long, alias = "time_e")]
+    #[arg(long, alias = "time_e", allow_negative_numbers = true)]
     end: Option<f64>,
     /// Only these topics (comma-separated).
     #[arg(short, long, value_delimiter = ',')]
@@ -41,10 +41,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         .exclude(&args.exclude)
         .run_file(&args.file, &args.output)
         .map_err(|e| crate::cli::rewrite_failure(&args.file, e))?;
-    let (rows_in, rows_out) = report
-        .topics
-        .iter()
-        .fold((0, 0), |(a, b), t| (a + t.rows_in, b + t.rows_out));
+    let (rows_in, rows_out) = report.rows();
     if window.is_bounded() && rows_in > 0 && rows_out == 0 {
         crate::cli::report_empty_window(&args.file, &window, None);
     }

@@ -214,7 +214,7 @@ pub(crate) fn in_window(window: &crate::columns::Window) -> String {
 }
 
 /// Says on stderr that rows were asked for in a window and none lay in it (the output has
-/// no rows), with the log's time span when it is known (header start to last timestamp,
+/// no rows), with the time span of the log's rows when it is known (first and last row,
 /// µs), so that an empty output is never silent.
 pub(crate) fn report_empty_window(
     file: &Path,
@@ -223,7 +223,7 @@ pub(crate) fn report_empty_window(
 ) {
     let span = span_us.map_or(String::new(), |(a, b)| {
         format!(
-            " (the log runs from {} s to {} s)",
+            " (the log's rows run from {} s to {} s)",
             a as f64 / 1e6,
             b as f64 / 1e6
         )

@@ -24,10 +24,10 @@ pub(crate) struct Args {
     #[arg(short, long, value_delimiter = ',')]
     messages: Vec<String>,
     /// Only rows from this time on, in seconds (pyulog's `-ts`, `--time_s`).
-    #[arg(long, alias = "time_s")]
+    #[arg(long, alias = "time_s", allow_negative_numbers = true)]
     start: Option<f64>,
     /// Only rows before this time, in seconds (pyulog's `-te`, `--time_e`).
-    #[arg(long, alias = "time_e")]
+    #[arg(long, alias = "time_e", allow_negative_numbers = true)]
     end: Option<f64>,
     /// `per-log`: DIR/<stem>/<topic>_<multi_id>.parquet; `hive`:
     /// DIR/topic=<topic>/log=<stem>/multi_id=<m>/data.parquet.

@@ -852,7 +852,7 @@ pub enum WindowError {
         value: f64,
     },
     /// The end is not after the start: no row could lie in the window.
-    #[error("the window ends ({end} s) before it starts ({start} s), so no row lies in it")]
+    #[error("the window ends ({end} s) at or before its start ({start} s), so no row lies in it")]
     Empty {
         /// The start given, seconds.
         start: f64,

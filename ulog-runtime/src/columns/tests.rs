@@ -479,7 +479,7 @@ fn a_window_refuses_bounds_no_row_could_lie_between() {
         Window::seconds(Some(30.0), Some(20.0))
             .unwrap_err()
             .to_string(),
-        "the window ends (20 s) before it starts (30 s), so no row lies in it"
+        "the window ends (20 s) at or before its start (30 s), so no row lies in it"
     );
     let w = Window::seconds(Some(1.5), Some(2.0)).unwrap();
     assert_eq!(

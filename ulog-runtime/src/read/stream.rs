@@ -20,7 +20,8 @@ const CHUNK: usize = 128 * 1024;
 #[derive(Debug, Clone)]
 pub enum Event<'a> {
     /// A definition was read (`B`, `F`, `I`, `M`, `Q`, `R`, or `P` before the data section);
-    /// [`StreamReader::metadata`] has it.
+    /// [`StreamReader::metadata`] has it. Never a `D`: the rows of a subscription that cannot
+    /// be decoded are skipped, said once by the subscription's diagnostic.
     Definition {
         /// File offset of the message.
         offset: u64,
@@ -420,8 +421,10 @@ impl<R: Read> StreamReader<R> {
                     };
                     return Ok(Some(match applied {
                         Applied::Nothing => match MessageType::from_byte(ty) {
+                            // A row of a subscription that cannot be decoded (said once,
+                            // at the subscription): not a definition, and no row either.
+                            Some(MessageType::Data) | None => continue,
                             Some(ty) => Next::Definition { offset, ty },
-                            None => continue,
                         },
                         Applied::Subscribed { diagnostic, .. } => {
                             self.pending = diagnostic.map(Box::new);

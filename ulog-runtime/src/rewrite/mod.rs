@@ -1096,6 +1096,15 @@ fn param_name(payload: &[u8]) -> String {
 
 /// What a rewrite did, in lines for people: the bytes, every topic instance that lost or
 /// changed rows, what was left out, and what anonymizing changed.
+impl Report {
+    /// Rows read and rows written, over every topic instance.
+    pub fn rows(&self) -> (usize, usize) {
+        self.topics
+            .iter()
+            .fold((0, 0), |(a, b), t| (a + t.rows_in, b + t.rows_out))
+    }
+}
+
 impl std::fmt::Display for Report {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let list = |items: &[String]| items.join(", ");
@@ -1104,10 +1113,7 @@ impl std::fmt::Display for Report {
             "{} bytes read, {} written",
             self.bytes_in, self.bytes_out
         )?;
-        let (rows_in, rows_out): (usize, usize) = self
-            .topics
-            .iter()
-            .fold((0, 0), |(a, b), t| (a + t.rows_in, b + t.rows_out));
+        let (rows_in, rows_out) = self.rows();
         writeln!(
             f,
             "rows: {rows_out} of {rows_in} written, {} topic instances",
@@ -1147,12 +1153,21 @@ impl std::fmt::Display for Report {
             )?;
         }
         if !self.subscriptions_dropped.is_empty() {
+            // The first few by name, then how many more (a window before every row drops
+            // them all).
+            const NAMED: usize = 8;
             let subs: Vec<String> = self
                 .subscriptions_dropped
                 .iter()
+                .take(NAMED)
                 .map(|(t, m)| format!("{t} #{m}"))
                 .collect();
-            writeln!(f, "subscriptions not written: {}", list(&subs))?;
+            let more = self.subscriptions_dropped.len().saturating_sub(NAMED);
+            write!(f, "subscriptions not written: {}", list(&subs))?;
+            if more > 0 {
+                write!(f, " and {more} more")?;
+            }
+            writeln!(f)?;
         }
         if !self.formats_dropped.is_empty() {
             writeln!(f, "formats not written: {}", list(&self.formats_dropped))?;
@@ -1210,6 +1225,12 @@ impl std::fmt::Display for Report {
                 s.orphan_rows,
                 s.unusable_messages
             )?;
+            for (topic, msg_id, why) in &s.unreadable_topics {
+                writeln!(
+                    f,
+                    "  `{topic}` (msg_id {msg_id}) cannot be read, left out with its rows: {why}"
+                )?;
+            }
         }
         Ok(())
     }

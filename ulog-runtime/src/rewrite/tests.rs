@@ -646,7 +646,9 @@ fn the_output_file_gets_its_folder_and_a_folder_in_its_place_is_an_error() {
 #[test]
 fn a_subscription_of_an_undefined_format_is_dropped_and_said() {
     // A fuzzer's find: a subscription naming a format the log never defines, kept as it was,
-    // made the output a log that does not read clean.
+    // made the output a log that does not read clean. A new user's: the rows of a
+    // subscription that cannot be read (its format undefined, or nesting a type no format
+    // defines) were written without their subscription, rows of no subscription.
     let mut bytes = crate::read::FileHeader {
         version: 1,
         start_timestamp: 0,
@@ -658,7 +660,11 @@ fn a_subscription_of_an_undefined_format_is_dropped_and_said() {
         Message::Format(b"t:uint64_t timestamp;float x;"),
         &mut bytes,
     );
-    for (msg_id, name) in [(0u16, &b"t"[..]), (1, b"nowhere")] {
+    msg(
+        Message::Format(b"broken:uint64_t timestamp;flxat x;"),
+        &mut bytes,
+    );
+    for (msg_id, name) in [(0u16, &b"t"[..]), (1, b"nowhere"), (2, b"broken")] {
         msg(
             Message::Subscribe {
                 multi_id: 0,
@@ -670,13 +676,9 @@ fn a_subscription_of_an_undefined_format_is_dropped_and_said() {
     }
     let mut row = 7u64.to_le_bytes().to_vec();
     row.extend_from_slice(&1.5f32.to_le_bytes());
-    msg(
-        Message::Data {
-            msg_id: 0,
-            data: &row,
-        },
-        &mut bytes,
-    );
+    for msg_id in [0, 1, 2, 1, 2] {
+        msg(Message::Data { msg_id, data: &row }, &mut bytes);
+    }
     let input = Log::from_slice(&bytes).unwrap();
     assert!(
         !input.diagnostics().is_empty(),
@@ -686,5 +688,44 @@ fn a_subscription_of_an_undefined_format_is_dropped_and_said() {
     let back = Log::from_slice(&out).unwrap();
     assert!(back.diagnostics().is_empty(), "{:?}", back.diagnostics());
     assert_eq!(back.row_count(), 1);
-    assert_eq!(report.subscriptions_dropped, [("nowhere".to_owned(), 0)]);
+    assert_eq!(back.data().count(), 1);
+    assert_eq!(
+        report.subscriptions_dropped,
+        [("nowhere".to_owned(), 0), ("broken".to_owned(), 0)]
+    );
+    // Said in the report, with why.
+    let text = report.to_string();
+    assert!(
+        text.contains(
+            "  `broken` (msg_id 2) cannot be read, left out with its rows: broken.x: type `flxat`"
+        ),
+        "{text}"
+    );
+    assert!(
+        text.contains("  `nowhere` (msg_id 1) cannot be read, left out with its rows: no format named `nowhere`"),
+        "{text}"
+    );
+}
+
+#[test]
+fn the_report_names_a_few_dropped_subscriptions_and_counts_the_rest() {
+    let report = |n: u8| Report {
+        subscriptions_dropped: (0..n).map(|m| ("t".to_owned(), m)).collect(),
+        ..Report::default()
+    };
+    let line = |r: Report| {
+        r.to_string()
+            .lines()
+            .find(|l| l.starts_with("subscriptions not written: "))
+            .unwrap()
+            .to_owned()
+    };
+    assert_eq!(
+        line(report(8)),
+        "subscriptions not written: t #0, t #1, t #2, t #3, t #4, t #5, t #6, t #7"
+    );
+    assert_eq!(
+        line(report(72)),
+        "subscriptions not written: t #0, t #1, t #2, t #3, t #4, t #5, t #6, t #7 and 64 more"
+    );
 }

@@ -18,7 +18,7 @@
 //! | `ulog.sha256` | SHA-256 of the whole log file, hex |
 //! | `ulog.sys_name`, `ulog.ver_sw`, `ulog.ver_hw` | those info values, when the log has them |
 //! | `ulog.start_timestamp` | the header's start time, µs |
-//! | `ulog.start_utc` | the start as a UTC date, from the header when it holds one, otherwise from the first GPS fix (`time_utc_usec` of `vehicle_gps_position` or `sensor_gps`) |
+//! | `ulog.start_utc` | the start as a UTC date, from the header when it holds one, otherwise from the first GPS fix (`time_utc_usec` of `vehicle_gps_position` or `sensor_gps` from 2000 to 2100: [`GpsClock`]) |
 //! | `ulog.topic`, `ulog.multi_id`, `ulog.format` | the table's topic, instance and format |
 //!
 //! The Arrow schema stored with the file also carries each column's ULog type

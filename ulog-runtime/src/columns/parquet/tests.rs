@@ -541,15 +541,18 @@ fn the_start_date_comes_from_the_header_or_the_first_gps_fix() {
     }
     let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
     let gps = w.topic::<VehicleGpsPosition>(0).unwrap();
-    // No fix yet, then a fix 3 s after boot: the log (which started at 0) began 3 s earlier.
-    w.write(
-        &gps,
-        &VehicleGpsPosition {
-            timestamp: 1_000_000,
-            time_utc_usec: 0,
-        },
-    )
-    .unwrap();
+    // No fix yet, a damaged row (a date in the year 586524), then a fix 3 s after boot:
+    // the log (which started at 0) began 3 s earlier.
+    for (timestamp, time_utc_usec) in [(1_000_000, 0), (2_000_000, u64::MAX)] {
+        w.write(
+            &gps,
+            &VehicleGpsPosition {
+                timestamp,
+                time_utc_usec,
+            },
+        )
+        .unwrap();
+    }
     let utc = 1_710_773_350_000_000;
     w.write(
         &gps,
