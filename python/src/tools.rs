@@ -10,7 +10,9 @@ use ulog_runtime::columns::parquet::{Converter, Layout, ParquetOptions};
 /// Converts logs to Parquet with the Rust `Converter` (what `ulog parquet` does); one dict
 /// per log, in order (only the rows from `start` to `end` seconds, as `ulog parquet --start
 /// --end`): `log`, `ok`, and either `files` (dicts of `path`, `topic`,
-/// `multi_id`, `rows`), `metadata`, `log_dir`, `notes`, or `error`. A log that fails does
+/// `multi_id`, `rows`), `metadata`, `log_dir`, `notes`, `skipped` (what reading left out:
+/// `unreadable_topics` as (topic, msg_id, why), `misfit_rows` as (topic, multi_id, rows),
+/// `orphan_rows`, `unusable_messages`, `damaged_bytes`), or `error`. A log that fails does
 /// not stop the others. The GIL is released while converting.
 #[pyfunction]
 #[pyo3(signature = (paths, out_dir, layout="per-log", topics=None, threads=None, analysis=true, start=None, end=None))]
@@ -68,6 +70,14 @@ pub(crate) fn to_parquet<'py>(
                 d.set_item("metadata", c.metadata.display().to_string())?;
                 d.set_item("log_dir", &c.log_dir)?;
                 d.set_item("notes", &c.notes)?;
+                let s = &c.skipped;
+                let skipped = PyDict::new(py);
+                skipped.set_item("unreadable_topics", s.unreadable_topics.clone())?;
+                skipped.set_item("misfit_rows", s.misfit_rows.clone())?;
+                skipped.set_item("orphan_rows", s.orphan_rows)?;
+                skipped.set_item("unusable_messages", s.unusable_messages)?;
+                skipped.set_item("damaged_bytes", s.damaged_bytes)?;
+                d.set_item("skipped", skipped)?;
             }
             Err(e) => {
                 d.set_item("ok", false)?;

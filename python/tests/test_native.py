@@ -214,9 +214,13 @@ def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
     # One topic as a str is that topic; a topic no log has rows of is a warning.
     one = ulog.to_parquet(str(good), tmp_path / "one", topics="battery_status")
     assert {f["topic"] for f in one[0]["files"]} == {"battery_status"}
-    with pytest.warns(UserWarning, match="no log has rows of topic `batery_status`"):
+    with pytest.warns(UserWarning) as said:
         none = ulog.to_parquet(str(good), tmp_path / "none", topics=["batery_status"])
     assert none[0]["ok"] and none[0]["files"] == []
+    assert [str(w.message) for w in said] == [
+        f"{good}: no Parquet file written: no topic has rows that can be read",
+        "no log has rows of topic `batery_status`",
+    ]
     # No log converted: the errors say why, and no topic is warned of.
     with warnings.catch_warnings():
         warnings.simplefilter("error")
@@ -235,9 +239,22 @@ def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
     assert np.array_equal(written, ts[3:9])
     expected = pa.table(log.table("battery_status", start=start, end=end))["timestamp"].to_numpy()
     assert np.array_equal(written, expected)
-    with pytest.warns(UserWarning, match="`battery_status` in the window before 1.0 s"):
+    with pytest.warns(UserWarning) as said:
         early = ulog.to_parquet(str(good), tmp_path / "early", topics="battery_status", end=1.0)
     assert early[0]["ok"] and early[0]["files"] == []
+    assert [str(w.message) for w in said] == [
+        f"{good}: no Parquet file written: no topic has rows that can be read in the window before 1.0 s",
+        "no log has rows of topic `battery_status` in the window before 1.0 s",
+    ]
+    meta = json.loads(open(early[0]["metadata"]).read())
+    assert meta["window"] == {"start_s": None, "end_s": 1.0}
+    # What reading left out is in the result and said, as `ulog parquet` says it on stderr.
+    assert results[0]["skipped"]["unreadable_topics"] == [] and results[0]["skipped"]["damaged_bytes"] == 0
+    cut = tmp_path / "cut_short.ulg"
+    cut.write_bytes(good.read_bytes()[:500_000])
+    with pytest.warns(UserWarning, match="cut_short.ulg: 37 damaged bytes skipped"):
+        short = ulog.to_parquet(str(cut), tmp_path / "short")
+    assert short[0]["ok"] and short[0]["skipped"]["damaged_bytes"] == 37
     with pytest.raises(ValueError, match="at or before its start"):
         ulog.to_parquet(str(good), tmp_path / "never", start=end, end=start)
     assert not (tmp_path / "never").exists()

@@ -853,8 +853,13 @@ impl<'c> Pass<'c> {
         );
         let metadata = self.converter.options.layout.metadata_path(&root, &log_dir);
         let earlier = earlier_files(&root, &metadata);
+        let window = self.converter.options.window;
         let document = MetadataJson {
             log: identity,
+            window: window.is_bounded().then_some(WindowFact {
+                start_s: window.start_us.map(|us| us / 1e6),
+                end_s: window.end_us.map(|us| us / 1e6),
+            }),
             facts: &facts,
             analysis: analysis.as_ref(),
             files: files
@@ -988,12 +993,23 @@ fn partial_path(path: &Path) -> PathBuf {
 #[derive(Serialize)]
 struct MetadataJson<'a> {
     log: &'a LogIdentity,
+    /// The window the files' rows were taken from, when one was asked for (the facts'
+    /// per-topic row counts are the whole log's).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    window: Option<WindowFact>,
     #[serde(flatten)]
     facts: &'a LogFacts,
     /// The flight analysis ([`crate::analysis`]), unless left out.
     #[serde(skip_serializing_if = "Option::is_none")]
     analysis: Option<&'a Analysis>,
     files: Vec<FileEntry<'a>>,
+}
+
+/// `metadata.json`'s `window`: its bounds in seconds of log time (`null`: none).
+#[derive(Serialize)]
+struct WindowFact {
+    start_s: Option<f64>,
+    end_s: Option<f64>,
 }
 
 /// A file of `metadata.json`, its path relative to the output folder.

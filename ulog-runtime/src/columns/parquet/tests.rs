@@ -451,7 +451,17 @@ fn a_new_conversion_of_a_log_replaces_the_files_of_the_earlier_one() {
     );
     let conv = late.convert_reader(&log_bytes(10)[..], "g.ulg").unwrap();
     assert!(conv.files.is_empty(), "{:?}", conv.files);
-    assert!(root.join("g/metadata.json").is_file());
+    // metadata.json says the window (its per-topic rows are the whole log's); without
+    // one it has no `window`.
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(root.join("g/metadata.json")).unwrap()).unwrap();
+    assert_eq!(
+        meta["window"],
+        serde_json::json!({"start_s": 1.0, "end_s": null})
+    );
+    let whole: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(root.join("f/metadata.json")).unwrap()).unwrap();
+    assert!(whole.get("window").is_none(), "{whole}");
     std::fs::remove_dir_all(&root).unwrap();
 }
 
