@@ -647,7 +647,13 @@ pub fn rewrite(data: &[u8]) {
     };
     let input = Log::from_slice(data).expect("what the stream read, the whole-file reader reads");
     let back = Log::from_slice(&out).expect("the rewritten log reads");
-    assert!(back.diagnostics().is_empty(), "{:?}", back.diagnostics());
+    // Clean, but for a msg_id the input subscribes to another topic: written as it was.
+    let renamed = |d: &ulog_runtime::Diagnostic| matches!(&d.kind, ulog_runtime::DiagnosticKind::DuplicateMsgId { previous, topic, .. } if previous != topic);
+    assert!(
+        back.diagnostics().iter().all(renamed),
+        "{:?}",
+        back.diagnostics()
+    );
     assert_eq!(back.row_count(), input.row_count(), "every row kept");
     assert_eq!(report.bytes_out, out.len() as u64);
     let mut again = Vec::new();
@@ -678,6 +684,10 @@ pub fn rewrite(data: &[u8]) {
             Err(e) => panic!("what reads once, rewrites: {e}"),
         }
         let cut = Log::from_slice(&out).expect("the output reads");
-        assert!(cut.diagnostics().is_empty(), "{:?}", cut.diagnostics());
+        assert!(
+            cut.diagnostics().iter().all(renamed),
+            "{:?}",
+            cut.diagnostics()
+        );
     }
 }

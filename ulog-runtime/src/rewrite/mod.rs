@@ -362,6 +362,8 @@ struct Pass<'r, W: Write> {
     instances: Vec<Instance>,
     /// Per `msg_id`: whether its current subscription was written.
     written_ids: Vec<bool>,
+    /// Per `msg_id` the output has subscribed: the topic instance of its last subscription.
+    out_subscribed: std::collections::HashMap<u16, (String, u8)>,
     scratch: Vec<u8>,
 }
 
@@ -524,6 +526,7 @@ impl Rewrite {
             subs: Vec::new(),
             instances: Vec::new(),
             written_ids: vec![false; 1 << 16],
+            out_subscribed: std::collections::HashMap::new(),
             scratch: Vec::new(),
         };
         pass.out.write(
@@ -929,6 +932,14 @@ impl<W: Write> Pass<'_, W> {
         }
         state.written = true;
         self.written_ids[usize::from(sub.msg_id)] = true;
+        // The input subscribing a msg_id again to the same topic instance (a damaged or
+        // spliced file) reads as damage; in the output its rows follow the first one, which
+        // means the same. (Another topic on a used msg_id is written as the input has it.)
+        let instance = (sub.name.clone(), sub.multi_id);
+        if self.out_subscribed.get(&sub.msg_id) == Some(&instance) {
+            return Ok(());
+        }
+        self.out_subscribed.insert(sub.msg_id, instance);
         self.out.message(&Message::Subscribe {
             multi_id: sub.multi_id,
             msg_id: sub.msg_id,

@@ -729,3 +729,69 @@ fn the_report_names_a_few_dropped_subscriptions_and_counts_the_rest() {
         "subscriptions not written: t #0, t #1, t #2, t #3, t #4, t #5, t #6, t #7 and 64 more"
     );
 }
+
+#[test]
+fn a_topic_subscribed_again_on_its_msg_id_is_written_once() {
+    // A fuzzer's find: a file whose subscriptions repeat (spliced), kept as it was, made an
+    // output that reads as damage ("msg_id 0 subscribed again").
+    let mut bytes = crate::read::FileHeader {
+        version: 1,
+        start_timestamp: 0,
+    }
+    .to_bytes()
+    .to_vec();
+    let msg = |m: Message<'_>, b: &mut Vec<u8>| m.encode(b).unwrap();
+    msg(
+        Message::Format(b"t:uint64_t timestamp;float x;"),
+        &mut bytes,
+    );
+    msg(
+        Message::Format(b"u:uint64_t timestamp;float y;"),
+        &mut bytes,
+    );
+    let subscribe = |b: &mut Vec<u8>, name: &[u8]| {
+        msg(
+            Message::Subscribe {
+                multi_id: 0,
+                msg_id: 0,
+                name,
+            },
+            b,
+        )
+    };
+    let data = |b: &mut Vec<u8>, t: u64| {
+        let mut row = t.to_le_bytes().to_vec();
+        row.extend_from_slice(&1.5f32.to_le_bytes());
+        msg(
+            Message::Data {
+                msg_id: 0,
+                data: &row,
+            },
+            b,
+        );
+    };
+    subscribe(&mut bytes, b"t");
+    data(&mut bytes, 1);
+    subscribe(&mut bytes, b"t");
+    data(&mut bytes, 2);
+    let input = Log::from_slice(&bytes).unwrap();
+    assert_eq!(input.diagnostics().len(), 1, "{:?}", input.diagnostics());
+    let (out, _) = rewrite(Rewrite::new(), &bytes);
+    let back = Log::from_slice(&out).unwrap();
+    assert!(back.diagnostics().is_empty(), "{:?}", back.diagnostics());
+    let times: Vec<u64> = back.data().map(|r| r.timestamp).collect();
+    assert_eq!(times, [1, 2]);
+    assert_eq!(
+        rewrite(Rewrite::new(), &out).0,
+        out,
+        "and rewrites to itself"
+    );
+    // Another topic on the msg_id: written as the input has it (its rows are `u`'s).
+    subscribe(&mut bytes, b"u");
+    data(&mut bytes, 3);
+    let (out, _) = rewrite(Rewrite::new(), &bytes);
+    let back = Log::from_slice(&out).unwrap();
+    let names: Vec<&str> = back.data().map(|r| r.subscription.name.as_str()).collect();
+    assert_eq!(names, ["t", "t", "u"]);
+    assert_eq!(back.diagnostics().len(), 1, "{:?}", back.diagnostics());
+}
