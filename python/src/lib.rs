@@ -26,6 +26,7 @@ fn _ulog(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<log::Log>()?;
     m.add_class::<log::Table>()?;
     m.add_function(wrap_pyfunction!(tools::to_parquet, m)?)?;
+    m.add_function(wrap_pyfunction!(tools::window_words, m)?)?;
     m.add_function(wrap_pyfunction!(tools::cli_main, m)?)?;
     m.add_function(wrap_pyfunction!(tools::log_names, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

@@ -72,16 +72,19 @@ impl Log {
     /// The log's start as UTC text: the header's date when it holds one, else from the first
     /// GPS fix (as `metadata.json`'s `start_utc` and the Parquet files' `ulog.start_utc`),
     /// else None.
+    /// The GIL is released while the GPS rows are read.
     #[getter]
-    fn start_utc(&self) -> Option<String> {
-        self.log
-            .header()
-            .start_utc()
-            .or_else(|| {
-                ulog_runtime::read::GpsClock::of_log(&self.log)
-                    .map(ulog_runtime::read::UtcTime::from_unix_us)
-            })
-            .map(|t| t.to_string())
+    fn start_utc(&self, py: Python<'_>) -> Option<String> {
+        let log = self.log.clone();
+        py.detach(move || {
+            log.header()
+                .start_utc()
+                .or_else(|| {
+                    ulog_runtime::read::GpsClock::of_log(&log)
+                        .map(ulog_runtime::read::UtcTime::from_unix_us)
+                })
+                .map(|t| t.to_string())
+        })
     }
 
     /// Info values by key (the whole key, spaces included).

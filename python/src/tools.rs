@@ -12,7 +12,8 @@ use ulog_runtime::columns::parquet::{Converter, Layout, ParquetOptions};
 /// --end`): `log`, `ok`, and either `files` (dicts of `path`, `topic`,
 /// `multi_id`, `rows`), `metadata`, `log_dir`, `notes`, `skipped` (what reading left out:
 /// `unreadable_topics` as (topic, msg_id, why), `misfit_rows` as (topic, multi_id, rows),
-/// `orphan_rows`, `unusable_messages`, `damaged_bytes`), or `error`. A log that fails does
+/// `orphan_rows`, `unusable_messages`, `damaged_bytes`), `said` (what `ulog parquet` says of
+/// the log on stderr, a line each), or `error`. A log that fails does
 /// not stop the others. The GIL is released while converting.
 #[pyfunction]
 #[pyo3(signature = (paths, out_dir, layout="per-log", topics=None, threads=None, analysis=true, start=None, end=None))]
@@ -48,6 +49,7 @@ pub(crate) fn to_parquet<'py>(
     };
     let threads = threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, std::num::NonZero::get));
+    let (wanted, window) = (options.topics.clone(), options.window);
     let converter = Converter::new(out_dir, options);
     let results = py.detach(|| converter.convert_files(&paths, threads));
     let out = PyList::empty(py);
@@ -78,6 +80,7 @@ pub(crate) fn to_parquet<'py>(
                 skipped.set_item("unusable_messages", s.unusable_messages)?;
                 skipped.set_item("damaged_bytes", s.damaged_bytes)?;
                 d.set_item("skipped", skipped)?;
+                d.set_item("said", c.lines(&wanted, &window))?;
             }
             Err(e) => {
                 d.set_item("ok", false)?;
@@ -111,4 +114,15 @@ pub(crate) fn log_names(paths: Vec<PathBuf>) -> Vec<String> {
             ulog_runtime::file_names::numbered("", &stem, "", *n)
         })
         .collect()
+}
+
+/// ` in the window from 1 s to 2 s` for the window of `start`/`end` seconds, `""` for none:
+/// what `ulog parquet` adds to a message about missing rows. ValueError for a window
+/// `Window::seconds` refuses.
+#[pyfunction]
+#[pyo3(signature = (start=None, end=None))]
+pub(crate) fn window_words(start: Option<f64>, end: Option<f64>) -> PyResult<String> {
+    Window::seconds(start, end)
+        .map(|w| w.in_words())
+        .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))
 }

@@ -43,9 +43,9 @@ def fuzz_regressions() -> Path:
 def pyulog_start_utc(path):
     """A log's start as UTC text, from pyulog's reading of it (an independent reference for
     ``ulog``'s ``start_utc``): the header's time when it is a date (2000 or later); else the
-    first row of the first GPS dataset (``vehicle_gps_position``/``sensor_gps``, in the
-    file's order of subscriptions) whose ``time_utc_usec`` is from 2000 to 2100, less that
-    row's time since the log's start; else None."""
+    earliest row of a GPS dataset (``vehicle_gps_position``/``sensor_gps``) whose
+    ``time_utc_usec`` is from 2000 to 2100, less that row's time since the log's start;
+    else None."""
     import datetime
 
     import pyulog
@@ -59,11 +59,14 @@ def pyulog_start_utc(path):
     u = pyulog.ULog(str(path), ["vehicle_gps_position", "sensor_gps"])
     if u.start_timestamp >= y2000:
         return text(u.start_timestamp)
-    for d in sorted(u.data_list, key=lambda d: d.msg_id):
+    fixes = []  # each dataset's first fix: (row time, start)
+    for d in u.data_list:
         utc = d.data.get("time_utc_usec")
         if utc is None or str(utc.dtype) != "uint64":
             continue
         for ts, t in zip(d.data["timestamp"], utc):
             if y2000 <= int(t) < y2100:
-                return text(int(t) - max(int(ts) - u.start_timestamp, 0))
-    return None
+                fixes.append((int(ts), int(t) - max(int(ts) - u.start_timestamp, 0)))
+                break
+    # The first in the file: rows are written in time order.
+    return text(min(fixes)[1]) if fixes else None

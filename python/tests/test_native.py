@@ -243,8 +243,8 @@ def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
         early = ulog.to_parquet(str(good), tmp_path / "early", topics="battery_status", end=1.0)
     assert early[0]["ok"] and early[0]["files"] == []
     assert [str(w.message) for w in said] == [
-        f"{good}: no Parquet file written: no topic has rows that can be read in the window before 1.0 s",
-        "no log has rows of topic `battery_status` in the window before 1.0 s",
+        f"{good}: no Parquet file written: no topic has rows that can be read in the window before 1 s",
+        "no log has rows of topic `battery_status` in the window before 1 s",
     ]
     meta = json.loads(open(early[0]["metadata"]).read())
     assert meta["window"] == {"start_s": None, "end_s": 1.0}
@@ -252,7 +252,7 @@ def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
     assert results[0]["skipped"]["unreadable_topics"] == [] and results[0]["skipped"]["damaged_bytes"] == 0
     cut = tmp_path / "cut_short.ulg"
     cut.write_bytes(good.read_bytes()[:500_000])
-    with pytest.warns(UserWarning, match="cut_short.ulg: 37 damaged bytes skipped"):
+    with pytest.warns(UserWarning, match="cut_short.ulg: 37 damaged bytes skipped \\(`ulog info -v` lists where\\)"):
         short = ulog.to_parquet(str(cut), tmp_path / "short")
     assert short[0]["ok"] and short[0]["skipped"]["damaged_bytes"] == 37
     with pytest.raises(ValueError, match="at or before its start"):

@@ -1170,6 +1170,22 @@ fn a_window_no_row_can_lie_in_is_refused_and_an_empty_one_is_named() {
         err.contains("no row of the topics asked for lies in the window from -1 s to -0.5 s"),
         "{err}"
     );
+    // Every topic excluded: no row asked for, so the window is not blamed.
+    let none = ulog(&[
+        "cut",
+        l,
+        "-o",
+        c,
+        "--start",
+        "10",
+        "--exclude",
+        "esc_status",
+    ]);
+    assert!(none.status.success());
+    assert!(
+        !String::from_utf8_lossy(&none.stderr).contains("lies in the window"),
+        "{none:?}"
+    );
     // A window the rows lie in: no such note.
     let fine = ulog(&["cut", l, "-o", c, "--start", "3723.3", "-m", "esc_status"]);
     assert!(fine.status.success());

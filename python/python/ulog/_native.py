@@ -230,12 +230,13 @@ def to_parquet(
     name as a str). One dict per log, in order: ``ok`` and what it wrote (``files``,
     ``metadata``, ``log_dir``, ``notes``, and ``skipped``: what reading left out, as
     ``unreadable_topics`` of (topic, msg_id, why), ``misfit_rows`` of (topic, multi_id,
-    rows), ``orphan_rows``, ``unusable_messages`` and ``damaged_bytes``), or ``error``; a log
-    that fails does not stop the others. As ``ulog parquet`` says it on stderr, a
-    ``UserWarning`` says a log that converted but has no file written (no topic with rows,
-    in the window), a topic of ``topics`` that no converted log has rows of, and what
-    reading left out of a log. ValueError, before any log is read, for a bound that is NaN
-    or infinite or an ``end`` at or before ``start``."""
+    rows), ``orphan_rows``, ``unusable_messages`` and ``damaged_bytes``; and ``said``, the
+    lines ``ulog parquet`` prints of the log on stderr), or ``error``; a log that fails does
+    not stop the others. What ``ulog parquet`` says on stderr is a ``UserWarning``: each
+    log's ``said`` (its notes, what reading left out, no file written), and a topic of
+    ``topics`` that no converted log has rows of (in the window). ValueError, before any log
+    is read, for a bound that is NaN, infinite or beyond any log time, or an ``end`` at or
+    before ``start``."""
     if isinstance(paths, (str, os.PathLike)):
         paths = [paths]
     if isinstance(topics, str):
@@ -250,31 +251,13 @@ def to_parquet(
         start,
         end,
     )
-    window = ""
-    if start is not None and end is not None:
-        window = f" in the window from {start} s to {end} s"
-    elif start is not None:
-        window = f" in the window from {start} s"
-    elif end is not None:
-        window = f" in the window before {end} s"
     for r in results:
-        if not r["ok"]:
-            continue
-        s = r["skipped"]
-        for topic, msg_id, why in s["unreadable_topics"]:
-            if topics is None or topic in topics:
-                warnings.warn(f"{r['log']}: skipped topic `{topic}` (msg_id {msg_id}): {why}", stacklevel=2)
-        if s["damaged_bytes"]:
-            warnings.warn(f"{r['log']}: {s['damaged_bytes']} damaged bytes skipped", stacklevel=2)
-        if not r["files"]:
-            warnings.warn(
-                f"{r['log']}: no Parquet file written: no topic has rows that can be read{window}",
-                stacklevel=2,
-            )
+        for line in r.get("said", []):
+            warnings.warn(f"{r['log']}: {line}", stacklevel=2)
     if topics is not None and any(r["ok"] for r in results):
         # (When every log failed, their errors say why; no topic is to blame.)
         written = {f["topic"] for r in results if r["ok"] for f in r["files"]}
         for topic in topics:
             if topic not in written:
-                warnings.warn(f"no log has rows of topic `{topic}`{window}", stacklevel=2)
+                warnings.warn(f"no log has rows of topic `{topic}`{_ulog.window_words(start, end)}", stacklevel=2)
     return results

@@ -72,8 +72,13 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         writeln!(out, "{} ({} rows)", f.path.display(), f.rows)?;
     }
     if options.window.is_bounded() && !written.is_empty() && written.iter().all(|f| f.rows == 0) {
-        // Where the rows lie (the header's start can be later than the first row).
-        let topics = log.topics();
+        // Where the rows of the topics asked for lie (the header's start can be later than
+        // the first row).
+        let topics: Vec<_> = log
+            .topics()
+            .into_iter()
+            .filter(|t| args.messages.is_empty() || args.messages.contains(&t.name))
+            .collect();
         let first = topics.iter().filter_map(|t| t.first_timestamp).min();
         let last = topics.iter().filter_map(|t| t.last_timestamp).max();
         crate::cli::report_empty_window(&args.file, &options.window, first.zip(last));
@@ -83,7 +88,9 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         &args.file,
         &args.messages,
         written.is_empty().then_some("CSV"),
-        &options.window,
+        // Which files there are does not depend on the window (a topic with no row in it
+        // gets its header line, as ulog2csv writes it).
+        &crate::columns::Window::default(),
     );
     Ok(())
 }

@@ -203,16 +203,6 @@ pub(crate) fn report_rewrite(
     Ok(())
 }
 
-/// ` in the window from 10 s to 20 s` for a bounded window, else nothing: what a message
-/// about missing rows adds, since rows outside the window exist but were not asked for.
-pub(crate) fn in_window(window: &crate::columns::Window) -> String {
-    if window.is_bounded() {
-        format!(" in the window {window}")
-    } else {
-        String::new()
-    }
-}
-
 /// Says on stderr that rows were asked for in a window and none lay in it (the output has
 /// no rows), with the time span of the log's rows when it is known (first and last row,
 /// µs), so that an empty output is never silent.
@@ -386,34 +376,14 @@ pub(crate) fn report_skipped(
     nothing_written: Option<&str>,
     window: &crate::columns::Window,
 ) {
-    let wanted = |t: &str| topics.is_empty() || topics.iter().any(|w| w == t);
     let say = |what: String| eprintln!("ulog: {}: {what}", file.display());
-    for (topic, msg_id, why) in skipped.unreadable_topics.iter().filter(|t| wanted(&t.0)) {
-        say(format!("skipped topic `{topic}` (msg_id {msg_id}): {why}"));
-    }
-    for (topic, multi_id, rows) in skipped.misfit_rows.iter().filter(|t| wanted(&t.0)) {
-        say(format!(
-            "skipped {rows} row{} of `{topic}` #{multi_id} whose size does not fit the format",
-            if *rows == 1 { "" } else { "s" }
-        ));
-    }
-    if skipped.orphan_rows > 0 && topics.is_empty() {
-        say(format!(
-            "skipped {} row{} of msg_ids no subscription declares",
-            skipped.orphan_rows,
-            if skipped.orphan_rows == 1 { "" } else { "s" }
-        ));
-    }
-    if skipped.damaged_bytes > 0 {
-        say(format!(
-            "{} damaged bytes skipped (`ulog info -v` lists where)",
-            skipped.damaged_bytes
-        ));
+    for line in skipped.lines(topics) {
+        say(line);
     }
     if let Some(kind) = nothing_written {
         say(format!(
             "no {kind} file written: no topic has rows that can be read{}",
-            in_window(window)
+            window.in_words()
         ));
     }
 }

@@ -113,16 +113,9 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
                     if n == 1 { "file" } else { "files" },
                     c.metadata.display()
                 )?;
-                for note in &c.notes {
-                    eprintln!("ulog: {}: {note}", path.display());
+                for line in c.lines(&args.messages, &window) {
+                    eprintln!("ulog: {}: {line}", path.display());
                 }
-                crate::cli::report_skipped(
-                    &c.skipped,
-                    path,
-                    &args.messages,
-                    c.files.is_empty().then_some("Parquet"),
-                    &window,
-                );
                 topics_seen.extend(c.files.iter().map(|f| f.topic.clone()));
             }
             Err(e) => {
@@ -138,7 +131,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     for topic in args.messages.iter().filter(|t| !topics_seen.contains(*t)) {
         eprintln!(
             "ulog: no log has rows of topic `{topic}`{}",
-            crate::cli::in_window(&window)
+            window.in_words()
         );
     }
     if failed > 0 {

@@ -851,6 +851,14 @@ pub enum WindowError {
         /// The value given.
         value: f64,
     },
+    /// A bound beyond any time a log can hold (µs in 64 bits: about 584,542 years).
+    #[error("the window's {bound} ({value:e} s) is beyond any time a log can hold")]
+    OutOfRange {
+        /// `start` or `end`.
+        bound: &'static str,
+        /// The value given, seconds.
+        value: f64,
+    },
     /// The end is not after the start: no row could lie in the window.
     #[error("the window ends ({end} s) at or before its start ({start} s), so no row lies in it")]
     Empty {
@@ -863,12 +871,15 @@ pub enum WindowError {
 
 impl Window {
     /// A window from `start` to `end` seconds of log time (µs timestamps / 1e6), either
-    /// bound absent for none; an error for a bound that is NaN or infinite and for an end
-    /// at or before the start.
+    /// bound absent for none; an error for a bound that is NaN, infinite or beyond what a
+    /// `u64` of µs holds, and for an end at or before the start.
     pub fn seconds(start: Option<f64>, end: Option<f64>) -> Result<Window, WindowError> {
         for (bound, value) in [("start", start), ("end", end)] {
             if let Some(value) = value.filter(|v| !v.is_finite()) {
                 return Err(WindowError::NotFinite { bound, value });
+            }
+            if let Some(value) = value.filter(|v| v.abs() * 1e6 > u64::MAX as f64) {
+                return Err(WindowError::OutOfRange { bound, value });
             }
         }
         if let (Some(start), Some(end)) = (start, end)
@@ -885,6 +896,16 @@ impl Window {
     /// Whether the window has a bound (a default window takes every row).
     pub fn is_bounded(&self) -> bool {
         self.start_us.is_some() || self.end_us.is_some()
+    }
+
+    /// ` in the window from 10 s to 20 s` for a bounded window, else nothing: what a
+    /// message about missing rows adds, since rows outside the window were not asked for.
+    pub fn in_words(&self) -> String {
+        if self.is_bounded() {
+            format!(" in the window {self}")
+        } else {
+            String::new()
+        }
     }
 
     /// Whether to take the next row of one topic instance, given whether an earlier row of

@@ -456,6 +456,15 @@ fn a_window_refuses_bounds_no_row_could_lie_between() {
         matches!(nan, WindowError::NotFinite { bound: "start", .. }),
         "{nan:?}"
     );
+    assert_eq!(
+        Window::seconds(None, Some(1e303)).unwrap_err().to_string(),
+        "the window's end (1e303 s) is beyond any time a log can hold"
+    );
+    assert!(matches!(
+        Window::seconds(Some(-2e13), None),
+        Err(WindowError::OutOfRange { bound: "start", .. })
+    ));
+    assert!(Window::seconds(None, Some(1.8e13)).is_ok(), "within u64 µs");
     let inf = Window::seconds(Some(1.0), Some(f64::INFINITY)).unwrap_err();
     assert!(
         matches!(inf, WindowError::NotFinite { bound: "end", .. }),

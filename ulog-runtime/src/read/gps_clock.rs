@@ -68,22 +68,27 @@ impl GpsClock {
         self.start
     }
 
-    /// The start of a whole-file log in UTC from its first GPS fix (µs since 1970), reading
-    /// the GPS topics' rows up to that fix; `None` when no row has one.
+    /// The start of a whole-file log in UTC from its first GPS fix in file order (µs since
+    /// 1970), as a streaming pass with a [`GpsClock`] finds it, reading each GPS
+    /// subscription's rows up to its first fix; `None` when no row has one.
     pub fn of_log(log: &Log<'_>) -> Option<u64> {
-        let mut clock = GpsClock::new(log.metadata().header().start_timestamp);
+        let start = log.metadata().header().start_timestamp;
+        let mut first: Option<(u64, u64)> = None; // (offset, start)
         for sub in log.subscriptions() {
-            if clock.start().is_some() {
-                break;
-            }
-            if let Some(at) = GpsClock::field(log.metadata().schema(), sub) {
-                for row in log.rows(sub) {
-                    if clock.watch(&row, at) {
-                        break;
-                    }
+            let Some(at) = GpsClock::field(log.metadata().schema(), sub) else {
+                continue;
+            };
+            let mut clock = GpsClock::new(start);
+            for row in log.rows(sub) {
+                if first.is_some_and(|(offset, _)| row.offset > offset) {
+                    break;
+                }
+                if clock.watch(&row, at) {
+                    first = clock.start().map(|utc| (row.offset, utc));
+                    break;
                 }
             }
         }
-        clock.start()
+        first.map(|(_, utc)| utc)
     }
 }

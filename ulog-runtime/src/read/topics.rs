@@ -97,6 +97,39 @@ pub struct Skipped {
 }
 
 impl Skipped {
+    /// What was left out, a line each, as the exports say it (`ulog csv`, `ulog parquet`,
+    /// `ulog json` on stderr, Python's `to_parquet` as warnings): unreadable topics and rows
+    /// that do not fit, of `topics` only (all if empty); rows of no subscription (when
+    /// `topics` is empty); damaged bytes.
+    pub fn lines(&self, topics: &[String]) -> Vec<String> {
+        let wanted = |t: &str| topics.is_empty() || topics.iter().any(|w| w == t);
+        let plural = |n: usize| if n == 1 { "" } else { "s" };
+        let mut out = Vec::new();
+        for (topic, msg_id, why) in self.unreadable_topics.iter().filter(|t| wanted(&t.0)) {
+            out.push(format!("skipped topic `{topic}` (msg_id {msg_id}): {why}"));
+        }
+        for (topic, multi_id, rows) in self.misfit_rows.iter().filter(|t| wanted(&t.0)) {
+            out.push(format!(
+                "skipped {rows} row{} of `{topic}` #{multi_id} whose size does not fit the format",
+                plural(*rows)
+            ));
+        }
+        if self.orphan_rows > 0 && topics.is_empty() {
+            out.push(format!(
+                "skipped {} row{} of msg_ids no subscription declares",
+                self.orphan_rows,
+                plural(self.orphan_rows)
+            ));
+        }
+        if self.damaged_bytes > 0 {
+            out.push(format!(
+                "{} damaged bytes skipped (`ulog info -v` lists where)",
+                self.damaged_bytes
+            ));
+        }
+        out
+    }
+
     /// Whether nothing was left out.
     pub fn is_empty(&self) -> bool {
         *self == Skipped::default()

@@ -1105,8 +1105,6 @@ fn param_name(payload: &[u8]) -> String {
     }
 }
 
-/// What a rewrite did, in lines for people: the bytes, every topic instance that lost or
-/// changed rows, what was left out, and what anonymizing changed.
 impl Report {
     /// Rows read and rows written, over every topic instance.
     pub fn rows(&self) -> (usize, usize) {
@@ -1116,6 +1114,8 @@ impl Report {
     }
 }
 
+/// What a rewrite did, in lines for people: the bytes, every topic instance that lost or
+/// changed rows, what was left out, and what anonymizing changed.
 impl std::fmt::Display for Report {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let list = |items: &[String]| items.join(", ");

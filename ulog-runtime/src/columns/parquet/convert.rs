@@ -111,6 +111,23 @@ pub struct Conversion {
     pub notes: Vec<String>,
 }
 
+impl Conversion {
+    /// What `ulog parquet` says of this log on stderr, a line each: its notes, what reading
+    /// left out ([`Skipped::lines`] of `topics`), and when no file was written, that no
+    /// topic has rows (in `window`, the conversion's).
+    pub fn lines(&self, topics: &[String], window: &crate::columns::Window) -> Vec<String> {
+        let mut out = self.notes.clone();
+        out.extend(self.skipped.lines(topics));
+        if self.files.is_empty() {
+            out.push(format!(
+                "no Parquet file written: no topic has rows that can be read{}",
+                window.in_words()
+            ));
+        }
+        out
+    }
+}
+
 /// One Parquet file of a conversion.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct WrittenFile {

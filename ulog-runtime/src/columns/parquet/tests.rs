@@ -599,6 +599,61 @@ fn the_start_date_comes_from_the_header_or_the_first_gps_fix() {
 }
 
 #[test]
+fn the_start_date_is_the_first_fix_in_the_file_whatever_the_gps_topic() {
+    #[derive(ULog)]
+    struct SensorGps {
+        timestamp: u64,
+        time_utc_usec: u64,
+    }
+    #[derive(ULog)]
+    struct VehicleGpsPosition {
+        timestamp: u64,
+        time_utc_usec: u64,
+    }
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    // sensor_gps is subscribed first, but vehicle_gps_position has the first fix.
+    let sensor = w.topic::<SensorGps>(0).unwrap();
+    let vehicle = w.topic::<VehicleGpsPosition>(0).unwrap();
+    let utc = 1_710_773_350_000_000;
+    let sensor_row = |timestamp, time_utc_usec| SensorGps {
+        timestamp,
+        time_utc_usec,
+    };
+    w.write(&sensor, &sensor_row(1_000_000, 0)).unwrap();
+    w.write(
+        &vehicle,
+        &VehicleGpsPosition {
+            timestamp: 2_000_000,
+            time_utc_usec: utc,
+        },
+    )
+    .unwrap();
+    // A later fix that disagrees by 7 s: not the one taken.
+    w.write(&sensor, &sensor_row(3_000_000, utc + 8_000_000))
+        .unwrap();
+    let bytes = w.into_inner();
+    let expected = "2024-03-18 14:49:08.000000 UTC";
+    let log = crate::Log::from_vec(bytes.clone()).unwrap();
+    assert_eq!(
+        LogIdentity::of_log(&log, "g.ulg").start_utc.as_deref(),
+        Some(expected)
+    );
+    assert_eq!(
+        crate::document::LogFacts::of_log(&log).start_utc.as_deref(),
+        Some(expected)
+    );
+    let root = temp("gps_order");
+    let conv = Converter::new(&root, ParquetOptions::default())
+        .convert_reader(&bytes[..], "g.ulg")
+        .unwrap();
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&conv.metadata).unwrap()).unwrap();
+    assert_eq!(meta["log"]["start_utc"], expected);
+    assert_eq!(meta["start_utc"], expected);
+    std::fs::remove_dir_all(&root).unwrap();
+}
+
+#[test]
 fn a_failed_conversion_leaves_no_file_behind() {
     let bytes = log_bytes(5000);
     let root = temp("fail");
