@@ -649,21 +649,11 @@ fn a_subscription_of_an_undefined_format_is_dropped_and_said() {
     // made the output a log that does not read clean. A new user's: the rows of a
     // subscription that cannot be read (its format undefined, or nesting a type no format
     // defines) were written without their subscription, rows of no subscription.
-    let mut bytes = crate::read::FileHeader {
-        version: 1,
-        start_timestamp: 0,
-    }
-    .to_bytes()
-    .to_vec();
+    let mut bytes = hand_built(&[
+        b"t:uint64_t timestamp;float x;",
+        b"broken:uint64_t timestamp;flxat x;",
+    ]);
     let msg = |m: Message<'_>, b: &mut Vec<u8>| m.encode(b).unwrap();
-    msg(
-        Message::Format(b"t:uint64_t timestamp;float x;"),
-        &mut bytes,
-    );
-    msg(
-        Message::Format(b"broken:uint64_t timestamp;flxat x;"),
-        &mut bytes,
-    );
     for (msg_id, name) in [(0u16, &b"t"[..]), (1, b"nowhere"), (2, b"broken")] {
         msg(
             Message::Subscribe {
@@ -734,21 +724,11 @@ fn the_report_names_a_few_dropped_subscriptions_and_counts_the_rest() {
 fn a_topic_subscribed_again_on_its_msg_id_is_written_once() {
     // A fuzzer's find: a file whose subscriptions repeat (spliced), kept as it was, made an
     // output that reads as damage ("msg_id 0 subscribed again").
-    let mut bytes = crate::read::FileHeader {
-        version: 1,
-        start_timestamp: 0,
-    }
-    .to_bytes()
-    .to_vec();
+    let mut bytes = hand_built(&[
+        b"t:uint64_t timestamp;float x;",
+        b"u:uint64_t timestamp;float y;",
+    ]);
     let msg = |m: Message<'_>, b: &mut Vec<u8>| m.encode(b).unwrap();
-    msg(
-        Message::Format(b"t:uint64_t timestamp;float x;"),
-        &mut bytes,
-    );
-    msg(
-        Message::Format(b"u:uint64_t timestamp;float y;"),
-        &mut bytes,
-    );
     let subscribe = |b: &mut Vec<u8>, name: &[u8]| {
         msg(
             Message::Subscribe {
@@ -794,4 +774,18 @@ fn a_topic_subscribed_again_on_its_msg_id_is_written_once() {
     let names: Vec<&str> = back.data().map(|r| r.subscription.name.as_str()).collect();
     assert_eq!(names, ["t", "t", "u"]);
     assert_eq!(back.diagnostics().len(), 1, "{:?}", back.diagnostics());
+}
+
+/// A version-1 header (start 0) and these formats, as hand-built bytes.
+fn hand_built(formats: &[&[u8]]) -> Vec<u8> {
+    let mut bytes = crate::read::FileHeader {
+        version: 1,
+        start_timestamp: 0,
+    }
+    .to_bytes()
+    .to_vec();
+    for f in formats {
+        Message::Format(f).encode(&mut bytes).unwrap();
+    }
+    bytes
 }
