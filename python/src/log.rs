@@ -76,15 +76,7 @@ impl Log {
     #[getter]
     fn start_utc(&self, py: Python<'_>) -> Option<String> {
         let log = self.log.clone();
-        py.detach(move || {
-            log.header()
-                .start_utc()
-                .or_else(|| {
-                    ulog_runtime::read::GpsClock::of_log(&log)
-                        .map(ulog_runtime::read::UtcTime::from_unix_us)
-                })
-                .map(|t| t.to_string())
-        })
+        py.detach(move || log.start_utc().map(|t| t.to_string()))
     }
 
     /// Info values by key (the whole key, spaces included).

@@ -236,10 +236,7 @@ impl LogFacts {
         LogFacts {
             version: header.version,
             start_timestamp: header.start_timestamp,
-            start_utc: header
-                .start_utc()
-                .or_else(|| c.gps_utc_start.map(crate::read::UtcTime::from_unix_us))
-                .map(|t| t.to_string()),
+            start_utc: crate::read::GpsClock::date(header, c.gps_utc_start).map(|t| t.to_string()),
             software_version: meta.software_version(),
             flag_bits: meta.flag_bits().map(|b: &FlagBits| FlagBitsFact {
                 compat: b.compat,

@@ -41,16 +41,12 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         .exclude(&args.exclude)
         .run_file(&args.file, &args.output)
         .map_err(|e| crate::cli::rewrite_failure(&args.file, e))?;
-    // Rows of the topics asked for, read and written: none written of some read is the
-    // window's doing.
-    let asked = |name: &str| {
-        (args.messages.is_empty() || args.messages.iter().any(|m| m == name))
-            && !args.exclude.iter().any(|m| m == name)
-    };
+    // Rows of the topics kept, read and written: none written of some read is the window's
+    // doing.
     let (rows_in, rows_out) = report
         .topics
         .iter()
-        .filter(|t| asked(&t.name))
+        .filter(|t| t.kept)
         .fold((0, 0), |(a, b), t| (a + t.rows_in, b + t.rows_out));
     if window.is_bounded() && rows_in > 0 && rows_out == 0 {
         crate::cli::report_empty_window(&args.file, &window, None);

@@ -2,7 +2,7 @@
 //! since boot ([`GpsClock`]): what `metadata.json`, `ulog json` and the Parquet files'
 //! `ulog.start_utc` give when the header has no date.
 
-use crate::read::{Log, Row, Subscription};
+use crate::read::{FileHeader, Log, Row, Subscription, UtcTime};
 use crate::schema::{FieldKind, Primitive, Schema};
 
 /// The UTC time of a log's start from its first GPS fix: `time_utc_usec` of
@@ -68,6 +68,16 @@ impl GpsClock {
         self.start
     }
 
+    /// A log's start date: the header's when it holds one ([`FileHeader::start_utc`]), else
+    /// `gps_utc_start` (what a [`GpsClock`] found, µs since 1970). The one rule behind
+    /// [`Log::start_utc`], `metadata.json`'s `start_utc` and the Parquet files'
+    /// `ulog.start_utc`.
+    pub fn date(header: FileHeader, gps_utc_start: Option<u64>) -> Option<UtcTime> {
+        header
+            .start_utc()
+            .or_else(|| gps_utc_start.map(UtcTime::from_unix_us))
+    }
+
     /// The start of a whole-file log in UTC from its first GPS fix in file order (µs since
     /// 1970), as a streaming pass with a [`GpsClock`] finds it, reading each GPS
     /// subscription's rows up to its first fix; `None` when no row has one.
@@ -90,5 +100,17 @@ impl GpsClock {
             }
         }
         first.map(|(_, utc)| utc)
+    }
+}
+
+impl Log<'_> {
+    /// The log's start as a UTC date: the header's when it holds one, else from the first
+    /// GPS fix ([`GpsClock::of_log`], which reads GPS rows up to it); `None` without either.
+    pub fn start_utc(&self) -> Option<UtcTime> {
+        let header = self.metadata().header();
+        match header.start_utc() {
+            Some(date) => Some(date),
+            None => GpsClock::date(header, GpsClock::of_log(self)),
+        }
     }
 }

@@ -233,6 +233,10 @@ pub struct TopicReport {
     pub rows_out: usize,
     /// Rows written changed by a transform (anonymized rows included).
     pub rows_changed: usize,
+    /// Whether the rules keep the instance (its rows in the window are written): false for a
+    /// topic left out by [`Rewrite::topics`], [`Rewrite::exclude`] or anonymizing, or one
+    /// whose format cannot be read.
+    pub kept: bool,
 }
 
 /// What a rewrite did.
@@ -894,6 +898,7 @@ impl<W: Write> Pass<'_, W> {
                 self.instances.len() - 1
             }
         };
+        self.instances[topic].report.kept |= kept;
         let mut transforms = Vec::new();
         if kept {
             for (t, transform) in self.rules.transforms.iter_mut().enumerate() {

@@ -282,6 +282,18 @@ fn topic_rules_drop_subscriptions_rows_and_formats_nothing_nests() {
             .formats_dropped
             .contains(&"battery_status".to_owned())
     );
+    // The report says which instances the rules kept.
+    let kept: Vec<(&str, bool)> = report
+        .topics
+        .iter()
+        .map(|t| (t.name.as_str(), t.kept))
+        .collect();
+    assert!(kept.contains(&("battery_status", false)), "{kept:?}");
+    assert!(
+        kept.iter()
+            .all(|&(n, k)| k != ["battery_status", "vehicle_gps_position"].contains(&n)),
+        "{kept:?}"
+    );
     // Only these topics: what they nest stays, the rest goes.
     let (out, report) = rewrite(Rewrite::new().topics(&["battery_status"]), &input);
     let log = Log::from_vec(out).unwrap();

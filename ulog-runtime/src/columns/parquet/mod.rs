@@ -190,9 +190,7 @@ impl LogIdentity {
             _ => None,
         };
         let header = meta.header();
-        let start_utc = header
-            .start_utc()
-            .or_else(|| gps_utc_start.map(crate::read::UtcTime::from_unix_us));
+        let start_utc = GpsClock::date(header, gps_utc_start);
         LogIdentity {
             file_name: file_name.to_owned(),
             sha256: sha256.iter().map(|b| format!("{b:02x}")).collect(),

@@ -642,6 +642,7 @@ fn the_start_date_is_the_first_fix_in_the_file_whatever_the_gps_topic() {
         crate::document::LogFacts::of_log(&log).start_utc.as_deref(),
         Some(expected)
     );
+    assert_eq!(log.start_utc().unwrap().to_string(), expected);
     let root = temp("gps_order");
     let conv = Converter::new(&root, ParquetOptions::default())
         .convert_reader(&bytes[..], "g.ulg")
