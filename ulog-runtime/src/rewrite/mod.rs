@@ -1168,25 +1168,31 @@ impl std::fmt::Display for Report {
                 if none == 1 { "" } else { "s" }
             )?;
         }
-        if !self.subscriptions_dropped.is_empty() {
-            // The first few by name, then how many more (a window before every row drops
-            // them all).
+        // Subscriptions and formats: the first few by name, then how many more (a window
+        // before every row drops them all).
+        let named = |items: Vec<String>| {
             const NAMED: usize = 8;
-            let subs: Vec<String> = self
+            let more = items.len().saturating_sub(NAMED);
+            let mut text = list(&items[..items.len().min(NAMED)]);
+            if more > 0 {
+                text += &format!(" and {more} more");
+            }
+            text
+        };
+        if !self.subscriptions_dropped.is_empty() {
+            let subs = self
                 .subscriptions_dropped
                 .iter()
-                .take(NAMED)
                 .map(|(t, m)| format!("{t} #{m}"))
                 .collect();
-            let more = self.subscriptions_dropped.len().saturating_sub(NAMED);
-            write!(f, "subscriptions not written: {}", list(&subs))?;
-            if more > 0 {
-                write!(f, " and {more} more")?;
-            }
-            writeln!(f)?;
+            writeln!(f, "subscriptions not written: {}", named(subs))?;
         }
         if !self.formats_dropped.is_empty() {
-            writeln!(f, "formats not written: {}", list(&self.formats_dropped))?;
+            writeln!(
+                f,
+                "formats not written: {}",
+                named(self.formats_dropped.clone())
+            )?;
         }
         if !self.info_dropped.is_empty() {
             writeln!(f, "info left out: {}", list(&self.info_dropped))?;

@@ -710,11 +710,19 @@ fn a_subscription_of_an_undefined_format_is_dropped_and_said() {
 }
 
 #[test]
-fn the_report_names_a_few_dropped_subscriptions_and_counts_the_rest() {
+fn the_report_names_a_few_dropped_subscriptions_and_formats_and_counts_the_rest() {
     let report = |n: u8| Report {
         subscriptions_dropped: (0..n).map(|m| ("t".to_owned(), m)).collect(),
+        formats_dropped: (0..n).map(|m| format!("f{m}")).collect(),
         ..Report::default()
     };
+    let formats = report(9).to_string();
+    assert!(
+        formats
+            .lines()
+            .any(|l| l == "formats not written: f0, f1, f2, f3, f4, f5, f6, f7 and 1 more"),
+        "{formats}"
+    );
     let line = |r: Report| {
         r.to_string()
             .lines()
