@@ -12,7 +12,7 @@ use ulog_runtime::columns::parquet::{Converter, Layout, ParquetOptions};
 /// --end`): `log`, `ok`, and either `files` (dicts of `path`, `topic`,
 /// `multi_id`, `rows`), `metadata`, `log_dir`, `notes`, `skipped` (what reading left out:
 /// `unreadable_topics` as (topic, msg_id, why), `misfit_rows` as (topic, multi_id, rows),
-/// `orphan_rows`, `unusable_messages`, `damaged_bytes`), `said` (what `ulog parquet` says of
+/// `orphan_rows`, `unusable_messages`, `damaged_bytes`, `ignored_appended_offsets`), `said` (what `ulog parquet` says of
 /// the log on stderr, a line each), or `error`. A log that fails does
 /// not stop the others. The GIL is released while converting.
 #[pyfunction]
@@ -79,6 +79,10 @@ pub(crate) fn to_parquet<'py>(
                 skipped.set_item("orphan_rows", s.orphan_rows)?;
                 skipped.set_item("unusable_messages", s.unusable_messages)?;
                 skipped.set_item("damaged_bytes", s.damaged_bytes)?;
+                skipped.set_item(
+                    "ignored_appended_offsets",
+                    s.ignored_appended_offsets.clone(),
+                )?;
                 d.set_item("skipped", skipped)?;
                 d.set_item("said", c.lines(&wanted, &window))?;
             }

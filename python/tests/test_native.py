@@ -5,6 +5,7 @@ threads reading at once."""
 import inspect
 import io
 import json
+import struct
 import subprocess
 import sys
 import threading
@@ -255,6 +256,17 @@ def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
     with pytest.warns(UserWarning, match="cut_short.ulg: 37 damaged bytes skipped \\(`ulog info -v` lists where\\)"):
         short = ulog.to_parquet(str(cut), tmp_path / "short")
     assert short[0]["ok"] and short[0]["skipped"]["damaged_bytes"] == 37
+    assert short[0]["skipped"]["ignored_appended_offsets"] == []
+    # A log with appended data, cut before it: the appended data that is not read is said.
+    appended = (good.parent / "sample_appended_multiple.ulg").read_bytes()
+    assert appended[16 + 2] == ord("B")
+    offsets = [o for o in struct.unpack_from("<3Q", appended, 16 + 3 + 16) if o]
+    cut_at = min(offsets) - 1000
+    cut = tmp_path / "appended_cut.ulg"
+    cut.write_bytes(appended[:cut_at])
+    with pytest.warns(UserWarning, match=f"appended data at byte {offsets[0]} not read"):
+        result = ulog.to_parquet(str(cut), tmp_path / "appended")
+    assert result[0]["skipped"]["ignored_appended_offsets"] == offsets
     with pytest.raises(ValueError, match="at or before its start"):
         ulog.to_parquet(str(good), tmp_path / "never", start=end, end=start)
     assert not (tmp_path / "never").exists()
@@ -294,6 +306,11 @@ def test_the_package_shows_only_its_public_names():
     public = {n for n in dir(ulog) if not n.startswith("_") and not inspect.ismodule(getattr(ulog, n))}
     assert public == {n for n in ulog.__all__ if not n.startswith("_")}
     assert all(hasattr(ulog, n) for n in ulog.__all__)
+    # The same of `ulog.spark` (importable without pyspark), which imports typing names.
+    from ulog import spark
+
+    assert [n for n in dir(spark) if not n.startswith("_")] == ["convert", "metadata", "topics"]
+    assert all(callable(getattr(spark, n)) for n in spark.__all__)
 
 
 def test_the_start_date_is_the_headers_or_the_first_gps_fixs(capsys):

@@ -156,6 +156,9 @@ pub struct SkippedFacts {
     pub unusable_messages: usize,
     /// Bytes skipped as damaged.
     pub damaged_bytes: u64,
+    /// Appended-data offsets of the flag bits that were ignored as impossible (the data
+    /// appended there, if any, is not read).
+    pub ignored_appended_offsets: Vec<u64>,
 }
 
 /// A subscription whose rows cannot be decoded.
@@ -333,6 +336,7 @@ impl LogFacts {
                 orphan_rows: c.skipped.orphan_rows,
                 unusable_messages: c.skipped.unusable_messages,
                 damaged_bytes: c.skipped.damaged_bytes,
+                ignored_appended_offsets: c.skipped.ignored_appended_offsets.clone(),
             },
             diagnostics: c.diagnostics.iter().map(ToString::to_string).collect(),
             diagnostics_omitted: c.diagnostics_omitted,

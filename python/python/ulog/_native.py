@@ -230,7 +230,8 @@ def to_parquet(
     name as a str). One dict per log, in order: ``ok`` and what it wrote (``files``,
     ``metadata``, ``log_dir``, ``notes``, and ``skipped``: what reading left out, as
     ``unreadable_topics`` of (topic, msg_id, why), ``misfit_rows`` of (topic, multi_id,
-    rows), ``orphan_rows``, ``unusable_messages`` and ``damaged_bytes``; and ``said``, the
+    rows), ``orphan_rows``, ``unusable_messages``, ``damaged_bytes`` and
+    ``ignored_appended_offsets`` (appended data not read); and ``said``, the
     lines ``ulog parquet`` prints of the log on stderr), or ``error``; a log that fails does
     not stop the others. What ``ulog parquet`` says on stderr is a ``UserWarning``: each
     log's ``said`` (its notes, what reading left out, no file written), and a topic of

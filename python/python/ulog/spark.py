@@ -31,6 +31,12 @@ from . import _ulog
 
 __all__ = ["convert", "metadata", "topics"]
 
+
+def __dir__() -> List[str]:
+    # What `dir(ulog.spark)` and tab completion show: the three functions, not the typing
+    # names and modules this file imports.
+    return sorted(__all__)
+
 # Spark holds no unsigned integers: each is widened as Spark widens it reading Parquet.
 _WIDER = {
     pa.uint8(): pa.int16(),

@@ -118,14 +118,15 @@ fn info(log: &Log<'_>, file: &Path, verbose: bool, out: &mut impl Write) -> Resu
     }
     let start = header.start_timestamp;
     let duration = meta.last_timestamp().saturating_sub(start);
+    // A time since boot as h:mm:ss; an absolute time as its date (475214:49:10 hours since
+    // 1970 says nothing).
+    let (start_text, clock) = match header.start_utc() {
+        Some(date) => (date.to_string(), ", an absolute time"),
+        None => (hms(start), ""),
+    };
     writeln!(
         out,
-        "Logging:    start {} ({start} µs{}), duration {} ({:.3} s)",
-        hms(start),
-        header
-            .start_utc()
-            .map(|t| format!(", an absolute time: {t}"))
-            .unwrap_or_default(),
+        "Logging:    start {start_text} ({start} µs{clock}), duration {} ({:.3} s)",
         hms(duration),
         duration as f64 / 1e6
     )?;

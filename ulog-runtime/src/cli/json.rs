@@ -41,10 +41,12 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         return Ok(());
     }
     let wanted = |s: &Subscription| args.messages.is_empty() || args.messages.contains(&s.name);
+    let mut lines = 0usize;
     for row in log.data() {
         if !wanted(row.subscription) {
             continue;
         }
+        lines += 1;
         let line = RowLine {
             topic: &row.subscription.name,
             multi_id: row.subscription.multi_id,
@@ -55,6 +57,18 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         out.write_all(b"\n")?;
     }
     report_skipped(&log, args);
+    if lines == 0 {
+        // An empty output is a valid JSON Lines file: say why it is empty.
+        eprintln!(
+            "ulog: {}: no row written: {} no rows that can be read",
+            args.file.display(),
+            if args.messages.is_empty() {
+                "the log has"
+            } else {
+                "the topics asked for have"
+            }
+        );
+    }
     Ok(())
 }
 

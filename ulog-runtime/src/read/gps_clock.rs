@@ -7,8 +7,8 @@ use crate::schema::{FieldKind, Primitive, Schema};
 
 /// The UTC time of a log's start from its first GPS fix: `time_utc_usec` of
 /// `vehicle_gps_position` or `sensor_gps`, less the time from the log's start to that row.
-/// A fix is a `time_utc_usec` from 2000 up to 2100 (a GPS without one reports 0; a value
-/// past 2100 is taken for damage).
+/// A fix is a `time_utc_usec` in [`UtcTime::PLAUSIBLE_US`], from 2000 up to 2100 (a GPS
+/// without one reports 0; a value past 2100 is taken for damage).
 #[derive(Debug, Clone, Copy)]
 pub struct GpsClock {
     log_start: u64,
@@ -47,15 +47,13 @@ impl GpsClock {
 
     /// Reads a row whose `time_utc_usec` is at `at`; returns whether the clock is set.
     pub fn watch(&mut self, row: &Row<'_>, at: usize) -> bool {
-        // 2000-01-01 and 2100-01-01 in µs: a GPS without a fix reports 0, and a value
-        // beyond the century is a damaged row, not a date.
-        const Y2000_US: u64 = 946_684_800_000_000;
-        const Y2100_US: u64 = 4_102_444_800_000_000;
         if self.start.is_none()
             && let Some(b) = row.data.get(at..at + 8)
         {
+            // A GPS without a fix reports 0, and a value beyond the century is a damaged
+            // row, not a date.
             let utc = u64::from_le_bytes(b.try_into().expect("8 bytes"));
-            if (Y2000_US..Y2100_US).contains(&utc) {
+            if UtcTime::PLAUSIBLE_US.contains(&utc) {
                 let since_start = row.timestamp.saturating_sub(self.log_start);
                 self.start = Some(utc.saturating_sub(since_start));
             }

@@ -42,18 +42,19 @@ impl FileHeader {
     }
 
     /// The start time as a UTC date, if it is one: some writers put an absolute Unix time in
-    /// microseconds here instead of the time since boot (taken as such from the year 2000 on).
+    /// microseconds here instead of the time since boot. A value is taken for a date when
+    /// [`UtcTime::plausible`] takes it (from 2000 up to 2100: boot times, days at most, are
+    /// far below; a value past 2100 is damage, neither a date nor a boot time).
     ///
     /// ```
     /// use ulog_runtime::read::FileHeader;
     /// let h = FileHeader { version: 1, start_timestamp: 1_710_773_350_346_000 };
     /// assert_eq!(h.start_utc().unwrap().to_string(), "2024-03-18 14:49:10.346000 UTC");
     /// assert!(FileHeader { version: 1, start_timestamp: 104_889_396 }.start_utc().is_none());
+    /// assert!(FileHeader { version: 1, start_timestamp: u64::MAX }.start_utc().is_none());
     /// ```
     pub fn start_utc(&self) -> Option<UtcTime> {
-        // 2000-01-01T00:00:00Z in µs: boot times (days at most) are far below it.
-        const Y2000_US: u64 = 946_684_800_000_000;
-        (self.start_timestamp >= Y2000_US).then(|| UtcTime::from_unix_us(self.start_timestamp))
+        UtcTime::plausible(self.start_timestamp)
     }
 
     /// The header as written to a file.
@@ -86,6 +87,25 @@ pub struct UtcTime {
 }
 
 impl UtcTime {
+    /// The Unix times, in µs, taken for dates in a log: from 2000-01-01 up to 2100-01-01 UTC.
+    /// A header's start or a GPS's `time_utc_usec` outside them is not a date: a time since
+    /// boot, a GPS without a fix (0), or damage.
+    pub const PLAUSIBLE_US: std::ops::Range<u64> = 946_684_800_000_000..4_102_444_800_000_000;
+
+    /// The date of a Unix time in µs if it lies in [`UtcTime::PLAUSIBLE_US`].
+    ///
+    /// ```
+    /// use ulog_runtime::read::UtcTime;
+    /// assert_eq!(UtcTime::plausible(1_710_773_350_346_000).unwrap().year, 2024);
+    /// assert!(UtcTime::plausible(0).is_none());
+    /// assert!(UtcTime::plausible(u64::MAX).is_none()); // the year 586524
+    /// ```
+    pub fn plausible(us: u64) -> Option<UtcTime> {
+        UtcTime::PLAUSIBLE_US
+            .contains(&us)
+            .then(|| UtcTime::from_unix_us(us))
+    }
+
     /// The date of a Unix time in microseconds (proleptic Gregorian calendar).
     pub fn from_unix_us(us: u64) -> UtcTime {
         let secs = us / 1_000_000;

@@ -94,6 +94,9 @@ pub struct Skipped {
     pub unusable_messages: usize,
     /// Bytes skipped as damaged (truncated tails included).
     pub damaged_bytes: u64,
+    /// Appended-data offsets of the flag bits that were ignored, impossible (backwards, or
+    /// past the end of a file cut short): the data appended there, if any, is not read.
+    pub ignored_appended_offsets: Vec<u64>,
 }
 
 impl Skipped {
@@ -125,6 +128,12 @@ impl Skipped {
             out.push(format!(
                 "{} damaged bytes skipped (`ulog info -v` lists where)",
                 self.damaged_bytes
+            ));
+        }
+        for offset in &self.ignored_appended_offsets {
+            out.push(format!(
+                "appended data at byte {offset} not read: the offset is impossible (backwards, \
+                 or past the end of a file cut short)"
             ));
         }
         out
@@ -170,6 +179,7 @@ impl Skipped {
                 None => self.misfit_rows.push((topic.clone(), *multi_id, 1)),
             },
             K::UnknownMsgId { .. } => self.orphan_rows += 1,
+            K::BadAppendedOffset(offset) => self.ignored_appended_offsets.push(*offset),
             K::UnknownMessageType { .. } | K::Malformed(_) | K::InvalidFormat { .. } => {
                 self.unusable_messages += 1;
             }

@@ -336,6 +336,18 @@ fn impossible_appended_offsets_are_reported() {
             DiagnosticKind::BadAppendedOffset(1 << 40)
         ]
     );
+    // What the exports say on stderr (`ulog json` said nothing of it before).
+    let skipped = log.skipped();
+    assert_eq!(skipped.ignored_appended_offsets, [10, 1 << 40]);
+    assert_eq!(
+        skipped.lines(&[]),
+        [
+            "appended data at byte 10 not read: the offset is impossible (backwards, or past \
+             the end of a file cut short)",
+            "appended data at byte 1099511627776 not read: the offset is impossible \
+             (backwards, or past the end of a file cut short)"
+        ]
+    );
 }
 
 #[test]

@@ -191,13 +191,24 @@ fn a_version_1_file_without_flag_bits_and_an_absolute_start_time() {
         assert_eq!(UtcTime::from_unix_us(us).to_string(), text);
     }
     assert_eq!(UtcTime::from_unix_us(u64::MAX).year, 586_524);
-    assert!(
+    // Before 2000 a boot time; from 2100 on damage (a header of 2^64-1 µs read as the year
+    // 586524 before): neither is a date.
+    for start_timestamp in [946_684_799_999_999, 4_102_444_800_000_000, u64::MAX] {
+        let header = FileHeader {
+            version: 1,
+            start_timestamp,
+        };
+        assert!(header.start_utc().is_none(), "{start_timestamp}");
+    }
+    assert_eq!(
         FileHeader {
             version: 1,
-            start_timestamp: 946_684_799_999_999
+            start_timestamp: 4_102_444_799_999_999
         }
         .start_utc()
-        .is_none()
+        .unwrap()
+        .year,
+        2099
     );
 }
 
