@@ -1042,6 +1042,39 @@ fn info_names_a_version_1_file_without_flag_bits_and_an_absolute_start() {
         ),
         "{text}"
     );
+    // No row: nothing said of where the rows lie.
+    assert!(!text.contains("later than every row"), "{text}");
+    // A damaged start (past 2100) is no time at all, and a start later than every row says
+    // where the rows lie (the duration, pyulog's, is 0 then).
+    let mut bytes = FileHeader {
+        version: 1,
+        start_timestamp: u64::MAX,
+    }
+    .to_bytes()
+    .to_vec();
+    let mut put = |m: Message<'_>| m.encode(&mut bytes).unwrap();
+    put(Message::Format(b"t:uint64_t timestamp;"));
+    put(Message::Subscribe {
+        multi_id: 0,
+        msg_id: 0,
+        name: b"t",
+    });
+    for t in [2_000_000u64, 5_500_000] {
+        put(Message::Data {
+            msg_id: 0,
+            data: &t.to_le_bytes(),
+        });
+    }
+    std::fs::write(&log, &bytes).unwrap();
+    let text = stdout(&["info", log.to_str().unwrap()]);
+    assert!(
+        text.contains(
+            "Logging:    start unknown (18446744073709551615 µs: neither a time since boot nor a \
+             date), duration 0:00:00 (0.000 s)\n            the header's start is later than \
+             every row: the rows run from 2 s to 5.5 s\n"
+        ),
+        "{text}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -1089,9 +1122,10 @@ fn cut_and_anonymize_write_new_logs_and_say_what_they_changed() {
     // Never over the input; a topic the log lacks is named with the closest.
     let same = ulog(&["cut", l, "-o", l, "--start", "3723.3"]);
     assert_eq!(same.status.code(), Some(1));
-    assert!(
-        String::from_utf8_lossy(&same.stderr).contains("the output is the input file"),
-        "{same:?}"
+    // The path once (it was printed twice before).
+    assert_eq!(
+        String::from_utf8_lossy(&same.stderr),
+        format!("ulog: {l}: the output is the input file; write the rewritten log elsewhere\n")
     );
     assert_eq!(
         std::fs::read(&log).unwrap(),
@@ -1218,6 +1252,23 @@ fn a_window_no_row_can_lie_in_is_refused_and_an_empty_one_is_named() {
         !String::from_utf8_lossy(&none.stderr).contains("lies in the window"),
         "{none:?}"
     );
+    // A topic both kept and excluded is left out, and said (it was silent before).
+    let both = ulog(&[
+        "cut",
+        l,
+        "-o",
+        c,
+        "-m",
+        "esc_status",
+        "--exclude",
+        "esc_status",
+    ]);
+    assert!(both.status.success());
+    assert_eq!(
+        String::from_utf8_lossy(&both.stderr),
+        format!("ulog: {l}: `esc_status` both kept (-m) and excluded (--exclude): left out\n")
+    );
+    assert_eq!(ulog_runtime::Log::open(c).unwrap().row_count(), 0);
     // A window the rows lie in: no such note.
     let fine = ulog(&["cut", l, "-o", c, "--start", "3723.3", "-m", "esc_status"]);
     assert!(fine.status.success());

@@ -35,6 +35,20 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     crate::cli::check_path(&args.file, false)?;
     let topics: Vec<String> = args.messages.iter().chain(&args.exclude).cloned().collect();
     crate::cli::check_topics_in_files(std::slice::from_ref(&args.file), &topics)?;
+    let both: Vec<&str> = args
+        .messages
+        .iter()
+        .filter(|t| args.exclude.contains(t))
+        .map(String::as_str)
+        .collect();
+    if !both.is_empty() {
+        // The exclusion wins: said, since no rule keeps the topic then.
+        eprintln!(
+            "ulog: {}: `{}` both kept (-m) and excluded (--exclude): left out",
+            args.file.display(),
+            both.join("`, `")
+        );
+    }
     let report = Rewrite::new()
         .window(window)
         .topics(&args.messages)

@@ -6,6 +6,7 @@ use std::path::Path;
 
 use std::path::PathBuf;
 
+use crate::read::UtcTime;
 use crate::{Log, Value};
 
 use crate::cli::Failure;
@@ -122,6 +123,11 @@ fn info(log: &Log<'_>, file: &Path, verbose: bool, out: &mut impl Write) -> Resu
     // 1970 says nothing).
     let (start_text, clock) = match header.start_utc() {
         Some(date) => (date.to_string(), ", an absolute time"),
+        // Past 2100: a damaged header, not a date and not days since boot.
+        None if start >= UtcTime::PLAUSIBLE_US.end => (
+            "unknown".to_owned(),
+            ": neither a time since boot nor a date",
+        ),
         None => (hms(start), ""),
     };
     writeln!(
@@ -130,6 +136,19 @@ fn info(log: &Log<'_>, file: &Path, verbose: bool, out: &mut impl Write) -> Resu
         hms(duration),
         duration as f64 / 1e6
     )?;
+    // The duration is pyulog's (the last timestamp less the header's start): say where the
+    // rows lie when the header's start is later than all of them (the duration is then 0).
+    let topics = log.topics();
+    let first = topics.iter().filter_map(|t| t.first_timestamp).min();
+    let last = topics.iter().filter_map(|t| t.last_timestamp).max();
+    if let Some((first, last)) = first.zip(last).filter(|&(_, last)| last < start) {
+        writeln!(
+            out,
+            "            the header's start is later than every row: the rows run from {} s to {} s",
+            first as f64 / 1e6,
+            last as f64 / 1e6
+        )?;
+    }
     match log.flag_bits() {
         Some(bits) => writeln!(
             out,

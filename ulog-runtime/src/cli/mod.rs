@@ -187,7 +187,10 @@ fn run(command: Command, out: &mut impl Write) -> Result<(), Failure> {
 /// or about the input `input` (its path first).
 pub(crate) fn rewrite_failure(input: &Path, e: crate::rewrite::RewriteError) -> Failure {
     match e {
-        crate::rewrite::RewriteError::Output { .. } => Failure::from(e.to_string()),
+        // These name their path already.
+        crate::rewrite::RewriteError::Output { .. } | crate::rewrite::RewriteError::SameFile(_) => {
+            Failure::from(e.to_string())
+        }
         other => Failure::at(input, other),
     }
 }
