@@ -21,7 +21,10 @@ const CHUNK: usize = 128 * 1024;
 pub enum Event<'a> {
     /// A definition was read (`B`, `F`, `I`, `M`, `Q`, `R`, or `P` before the data section);
     /// [`StreamReader::metadata`] has it. Never a `D`: the rows of a subscription that cannot
-    /// be decoded are skipped, said once by the subscription's diagnostic.
+    /// be decoded are skipped, said once by the subscription's diagnostic. A definition kept
+    /// despite something odd (a format outside the grammar, a value kept as far as it goes)
+    /// is this event, then an [`Event::Diagnostic`] that says what is odd; a definition left
+    /// out is only the diagnostic.
     Definition {
         /// File offset of the message.
         offset: u64,
@@ -407,6 +410,15 @@ impl<R: Read> StreamReader<R> {
                     applied,
                     payload,
                 } => {
+                    // A message kept despite a note (a format outside the grammar, a value
+                    // kept as far as it goes) is the message's event, then the note's: a
+                    // tool that copies messages copies it.
+                    let (applied, note) = match applied {
+                        Applied::Diagnostic(d) if kept_despite(&d.kind) => {
+                            (Applied::Nothing, Some(Box::new(d)))
+                        }
+                        other => (other, None),
+                    };
                     // A diagnostic stands for no message (its offset may lie outside the
                     // window).
                     let (ty, range) = if let Applied::Diagnostic(_) = applied {
@@ -419,6 +431,9 @@ impl<R: Read> StreamReader<R> {
                         self.last = Some((offset, self.buf[at - 1], range.clone()));
                         (self.buf[at - 1], range)
                     };
+                    if note.is_some() {
+                        self.pending = note;
+                    }
                     return Ok(Some(match applied {
                         Applied::Nothing => match MessageType::from_byte(ty) {
                             // A row of a subscription that cannot be decoded (said once,
@@ -514,4 +529,13 @@ impl<R: Read> StreamReader<R> {
             }
         }
     }
+}
+
+/// Whether a diagnostic notes a message that was applied all the same (so the message is
+/// given as an event, the note after it), rather than one left out.
+fn kept_despite(kind: &crate::DiagnosticKind) -> bool {
+    matches!(
+        kind,
+        crate::DiagnosticKind::OddFormat { .. } | crate::DiagnosticKind::KeptValue { .. }
+    )
 }

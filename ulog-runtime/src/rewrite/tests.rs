@@ -797,6 +797,68 @@ fn a_topic_subscribed_again_on_its_msg_id_is_written_once() {
 }
 
 /// A version-1 header (start 0) and these formats, as hand-built bytes.
+#[test]
+fn a_format_and_an_info_kept_despite_a_note_are_written() {
+    // A fuzzer's find: the stream reader gave a format outside the grammar (kept, as pyulog
+    // reads it) as a diagnostic only, so the rewrite wrote its subscription without it and
+    // the output read as damage; an info value kept as far as it goes was dropped the same way.
+    let mut bytes = hand_built(&[b"t:uint64_t timestamp;float a-b;"]);
+    let msg = |m: Message<'_>, b: &mut Vec<u8>| m.encode(b).unwrap();
+    msg(
+        Message::Info(crate::read::KeyValue {
+            key: b"char[4] sys_name",
+            value: b"\xffab\xfe",
+        }),
+        &mut bytes,
+    );
+    msg(
+        Message::Subscribe {
+            multi_id: 0,
+            msg_id: 0,
+            name: b"t",
+        },
+        &mut bytes,
+    );
+    for t in [1u64, 2] {
+        let mut row = t.to_le_bytes().to_vec();
+        row.extend_from_slice(&2.5f32.to_le_bytes());
+        msg(
+            Message::Data {
+                msg_id: 0,
+                data: &row,
+            },
+            &mut bytes,
+        );
+    }
+    let input = Log::from_slice(&bytes).unwrap();
+    let notes: Vec<String> = input
+        .diagnostics()
+        .iter()
+        .map(|d| d.kind.to_string())
+        .collect();
+    assert_eq!(notes.len(), 2, "{notes:?}");
+    assert!(notes[0].starts_with("format definition `t:uint64_t timestamp;float a-b;` kept"));
+    let (out, report) = rewrite(Rewrite::new(), &bytes);
+    assert!(report.formats_dropped.is_empty());
+    let back = Log::from_slice(&out).unwrap();
+    // The same notes of the same messages, and nothing else.
+    let back_notes: Vec<String> = back
+        .diagnostics()
+        .iter()
+        .map(|d| d.kind.to_string())
+        .collect();
+    assert_eq!(back_notes, notes);
+    let times: Vec<u64> = back.data().map(|r| r.timestamp).collect();
+    assert_eq!(times, [1, 2]);
+    assert_eq!(
+        back.metadata().info()[0].raw,
+        input.metadata().info()[0].raw,
+        "the info's bytes"
+    );
+    // A copy of the copy is the copy.
+    assert_eq!(rewrite(Rewrite::new(), &out).0, out);
+}
+
 fn hand_built(formats: &[&[u8]]) -> Vec<u8> {
     let mut bytes = crate::read::FileHeader {
         version: 1,
