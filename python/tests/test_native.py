@@ -219,7 +219,7 @@ def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
         none = ulog.to_parquet(str(good), tmp_path / "none", topics=["batery_status"])
     assert none[0]["ok"] and none[0]["files"] == []
     assert [str(w.message) for w in said] == [
-        f"{good}: no Parquet file written: no topic has rows that can be read",
+        f"{good}: no Parquet file written: the topics asked for have no rows that can be read",
         "no log has rows of topic `batery_status`",
     ]
     # No log converted: the errors say why, and no topic is warned of.
@@ -244,7 +244,7 @@ def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
         early = ulog.to_parquet(str(good), tmp_path / "early", topics="battery_status", end=1.0)
     assert early[0]["ok"] and early[0]["files"] == []
     assert [str(w.message) for w in said] == [
-        f"{good}: no Parquet file written: no topic has rows that can be read in the window before 1 s",
+        f"{good}: no Parquet file written: the topics asked for have no rows that can be read in the window before 1 s",
         "no log has rows of topic `battery_status` in the window before 1 s",
     ]
     meta = json.loads(open(early[0]["metadata"]).read())

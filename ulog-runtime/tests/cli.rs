@@ -1000,6 +1000,19 @@ fn csv_and_json_say_what_they_skip() {
             .unwrap()
             .ends_with("no row written: the topics asked for have no rows that can be read\n")
     );
+    let out = ulog(&[
+        "csv",
+        log.to_str().unwrap(),
+        "-m",
+        "a",
+        "-o",
+        dir.join("out_a").to_str().unwrap(),
+    ]);
+    assert!(
+        String::from_utf8(out.stderr)
+            .unwrap()
+            .ends_with("no CSV file written: the topics asked for have no rows that can be read\n")
+    );
     let cut = dir.join("cut.ulg");
     std::fs::write(&cut, &bytes[..bytes.len() - 3]).unwrap();
     let out = ulog(&["json", cut.to_str().unwrap()]);
@@ -1221,7 +1234,8 @@ fn a_window_no_row_can_lie_in_is_refused_and_an_empty_one_is_named() {
     let pq = ulog(&[&["parquet", l, "-o", o][..], &early[..]].concat());
     let err = String::from_utf8_lossy(&pq.stderr);
     assert!(
-        err.contains("no Parquet file written: no topic has rows that can be read in the window from 10 s to 20 s"),
+        // `-m esc_status`: of the topics asked for.
+        err.contains("no Parquet file written: the topics asked for have no rows that can be read in the window from 10 s to 20 s"),
         "{err}"
     );
     assert!(

@@ -384,10 +384,7 @@ pub(crate) fn report_skipped(
         say(line);
     }
     if let Some(kind) = nothing_written {
-        say(format!(
-            "no {kind} file written: no topic has rows that can be read{}",
-            window.in_words()
-        ));
+        say(window.nothing_written(kind, topics));
     }
 }
 

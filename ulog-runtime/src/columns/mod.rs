@@ -898,6 +898,22 @@ impl Window {
         self.start_us.is_some() || self.end_us.is_some()
     }
 
+    /// `no CSV file written: the topics asked for have no rows that can be read in the
+    /// window from 10 s to 20 s`: what an export says when it wrote no file of `kind`
+    /// (`topics` empty: `no topic has rows ...`), as `ulog csv`, `ulog parquet` and Python's
+    /// `to_parquet` say it.
+    pub fn nothing_written(&self, kind: &str, topics: &[String]) -> String {
+        format!(
+            "no {kind} file written: {} rows that can be read{}",
+            if topics.is_empty() {
+                "no topic has"
+            } else {
+                "the topics asked for have no"
+            },
+            self.in_words()
+        )
+    }
+
     /// ` in the window from 10 s to 20 s` for a bounded window, else nothing: what a
     /// message about missing rows adds, since rows outside the window were not asked for.
     pub fn in_words(&self) -> String {

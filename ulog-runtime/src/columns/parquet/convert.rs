@@ -114,15 +114,13 @@ pub struct Conversion {
 impl Conversion {
     /// What `ulog parquet` says of this log on stderr, a line each: its notes, what reading
     /// left out ([`Skipped::lines`] of `topics`), and when no file was written, that no
-    /// topic has rows (in `window`, the conversion's).
+    /// topic (of `topics`) has rows (in `window`, the conversion's:
+    /// [`Window::nothing_written`](crate::columns::Window::nothing_written)).
     pub fn lines(&self, topics: &[String], window: &crate::columns::Window) -> Vec<String> {
         let mut out = self.notes.clone();
         out.extend(self.skipped.lines(topics));
         if self.files.is_empty() {
-            out.push(format!(
-                "no Parquet file written: no topic has rows that can be read{}",
-                window.in_words()
-            ));
+            out.push(window.nothing_written("Parquet", topics));
         }
         out
     }
