@@ -138,7 +138,12 @@ fn info(log: &Log<'_>, file: &Path, verbose: bool, out: &mut impl Write) -> Resu
     )?;
     // The duration is pyulog's (the last timestamp less the header's start): say where the
     // rows lie when the header's start is later than all of them (the duration is then 0).
-    let topics = log.topics();
+    // (The rows' span is looked up only then: it indexes every row.)
+    let topics = if duration == 0 {
+        log.topics()
+    } else {
+        Vec::new()
+    };
     let first = topics.iter().filter_map(|t| t.first_timestamp).min();
     let last = topics.iter().filter_map(|t| t.last_timestamp).max();
     if let Some((first, last)) = first.zip(last).filter(|&(_, last)| last < start) {

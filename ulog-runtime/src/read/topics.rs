@@ -103,7 +103,7 @@ impl Skipped {
     /// What was left out, a line each, as the exports say it (`ulog csv`, `ulog parquet`,
     /// `ulog json` on stderr, Python's `to_parquet` as warnings): unreadable topics and rows
     /// that do not fit, of `topics` only (all if empty); rows of no subscription (when
-    /// `topics` is empty); damaged bytes.
+    /// `topics` is empty); damaged bytes; appended data not read.
     pub fn lines(&self, topics: &[String]) -> Vec<String> {
         let wanted = |t: &str| topics.is_empty() || topics.iter().any(|w| w == t);
         let plural = |n: usize| if n == 1 { "" } else { "s" };
