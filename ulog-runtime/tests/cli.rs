@@ -973,7 +973,7 @@ fn csv_and_json_say_what_they_skip() {
         let empty = if document {
             String::new()
         } else {
-            format!("ulog: {l}: no row written: the log has no rows that can be read\n")
+            format!("ulog: {l}: no row written: no topic has rows that can be read\n")
         };
         assert_eq!(
             String::from_utf8(out.stderr).unwrap(),
@@ -990,7 +990,7 @@ fn csv_and_json_say_what_they_skip() {
     assert_eq!(
         String::from_utf8(out.stderr).unwrap(),
         format!(
-            "ulog: {}: no row written: the log has no rows that can be read\n",
+            "ulog: {}: no row written: no topic has rows that can be read\n",
             header_only.display()
         )
     );

@@ -136,23 +136,21 @@ fn info(log: &Log<'_>, file: &Path, verbose: bool, out: &mut impl Write) -> Resu
         hms(duration),
         duration as f64 / 1e6
     )?;
-    // The duration is pyulog's (the last timestamp less the header's start): say where the
-    // rows lie when the header's start is later than all of them (the duration is then 0).
-    // (The rows' span is looked up only then: it indexes every row.)
-    let topics = if duration == 0 {
-        log.topics()
-    } else {
-        Vec::new()
-    };
-    let first = topics.iter().filter_map(|t| t.first_timestamp).min();
-    let last = topics.iter().filter_map(|t| t.last_timestamp).max();
-    if let Some((first, last)) = first.zip(last).filter(|&(_, last)| last < start) {
-        writeln!(
-            out,
-            "            the header's start is later than every row: the rows run from {} s to {} s",
-            first as f64 / 1e6,
-            last as f64 / 1e6
-        )?;
+    // The duration is pyulog's (the last timestamp less the header's start): when it is 0,
+    // say where the rows lie if the header's start is later than all of them. (The rows'
+    // span is looked up only then: it indexes every row.)
+    if duration == 0 {
+        let topics = log.topics();
+        let first = topics.iter().filter_map(|t| t.first_timestamp).min();
+        let last = topics.iter().filter_map(|t| t.last_timestamp).max();
+        if let Some((first, last)) = first.zip(last).filter(|&(_, last)| last < start) {
+            writeln!(
+                out,
+                "            the header's start is later than every row: the rows run from {} s to {} s",
+                first as f64 / 1e6,
+                last as f64 / 1e6
+            )?;
+        }
     }
     match log.flag_bits() {
         Some(bits) => writeln!(

@@ -60,13 +60,9 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     if lines == 0 {
         // An empty output is a valid JSON Lines file: say why it is empty.
         eprintln!(
-            "ulog: {}: no row written: {} no rows that can be read",
+            "ulog: {}: {}",
             args.file.display(),
-            if args.messages.is_empty() {
-                "the log has"
-            } else {
-                "the topics asked for have"
-            }
+            crate::columns::Window::default().nothing_written("row", &args.messages)
         );
     }
     Ok(())

@@ -384,7 +384,7 @@ pub(crate) fn report_skipped(
         say(line);
     }
     if let Some(kind) = nothing_written {
-        say(window.nothing_written(kind, topics));
+        say(window.nothing_written(&format!("{kind} file"), topics));
     }
 }
 

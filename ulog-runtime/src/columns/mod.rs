@@ -899,12 +899,12 @@ impl Window {
     }
 
     /// `no CSV file written: the topics asked for have no rows that can be read in the
-    /// window from 10 s to 20 s`: what an export says when it wrote no file of `kind`
-    /// (`topics` empty: `no topic has rows ...`), as `ulog csv`, `ulog parquet` and Python's
-    /// `to_parquet` say it.
-    pub fn nothing_written(&self, kind: &str, topics: &[String]) -> String {
+    /// window from 10 s to 20 s`: what an export says when it wrote no `what` (`topics`
+    /// empty: `no topic has rows ...`), as `ulog csv`, `ulog parquet`, `ulog json` and
+    /// Python's `to_parquet` say it.
+    pub fn nothing_written(&self, what: &str, topics: &[String]) -> String {
         format!(
-            "no {kind} file written: {} rows that can be read{}",
+            "no {what} written: {} rows that can be read{}",
             if topics.is_empty() {
                 "no topic has"
             } else {

@@ -361,7 +361,7 @@ impl<S: RowSink> Collected<S> {
                         self.sink
                             .row(&walker.meta, offset, &payload[2..], sub, timestamp);
                     }
-                    Applied::Diagnostic(d) => self.diagnostics.push(d),
+                    Applied::Noted(d) | Applied::Diagnostic(d) => self.diagnostics.push(d),
                 },
                 Step::NeedMore { .. } | Step::End => return Ok(Walked::End),
             }

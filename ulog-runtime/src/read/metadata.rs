@@ -345,6 +345,10 @@ pub(crate) enum Applied {
     Dropout(Dropout),
     ParameterChange(ParameterChange),
     Sync,
+    /// The message was applied all the same, with a note on what is odd about it (a format
+    /// outside the grammar, a value kept as far as it goes).
+    Noted(Diagnostic),
+    /// The message was left out, and why.
     Diagnostic(Diagnostic),
 }
 
@@ -517,6 +521,7 @@ impl Metadata {
     /// Interprets one framed message.
     pub(crate) fn apply(&mut self, offset: u64, msg: Message<'_>) -> Result<Applied, ReadError> {
         let diag = |kind| Ok(Applied::Diagnostic(Diagnostic { offset, kind }));
+        let noted = |kind| Ok(Applied::Noted(Diagnostic { offset, kind }));
         match msg {
             Message::FlagBits(bits) => {
                 if offset != super::message::HEADER_LEN as u64 || self.flag_bits.is_some() {
@@ -545,7 +550,7 @@ impl Metadata {
                 if notes.is_empty() {
                     Ok(Applied::Nothing)
                 } else {
-                    diag(DiagnosticKind::OddFormat {
+                    noted(DiagnosticKind::OddFormat {
                         text,
                         notes: notes.join("; "),
                         not_utf8: !valid,
@@ -568,7 +573,7 @@ impl Metadata {
                         raw: d.raw,
                     }),
                 }
-                problem.map_or(Ok(Applied::Nothing), diag)
+                problem.map_or(Ok(Applied::Nothing), noted)
             }
             Message::MultiInfo { continued, entry } => {
                 let d = decode_key_value(entry);
@@ -591,7 +596,7 @@ impl Metadata {
                         raw: vec![vec![d.raw]],
                     }),
                 }
-                problem.map_or(Ok(Applied::Nothing), diag)
+                problem.map_or(Ok(Applied::Nothing), noted)
             }
             Message::Parameter(kv) => {
                 let (name, value, problem) = match param_value(kv) {
@@ -619,7 +624,7 @@ impl Metadata {
                         self.initial_parameters.push(Parameter { name, value });
                     }
                 }
-                problem.map_or(Ok(Applied::Nothing), diag)
+                problem.map_or(Ok(Applied::Nothing), noted)
             }
             Message::DefaultParameter {
                 default_types,

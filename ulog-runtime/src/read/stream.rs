@@ -410,14 +410,14 @@ impl<R: Read> StreamReader<R> {
                     applied,
                     payload,
                 } => {
-                    // A message kept despite a note (a format outside the grammar, a value
-                    // kept as far as it goes) is the message's event, then the note's: a
-                    // tool that copies messages copies it.
-                    let (applied, note) = match applied {
-                        Applied::Diagnostic(d) if kept_despite(&d.kind) => {
-                            (Applied::Nothing, Some(Box::new(d)))
+                    // A message applied with a note is the message's event, then the
+                    // note's: a tool that copies messages copies it.
+                    let applied = match applied {
+                        Applied::Noted(d) => {
+                            self.pending = Some(Box::new(d));
+                            Applied::Nothing
                         }
-                        other => (other, None),
+                        other => other,
                     };
                     // A diagnostic stands for no message (its offset may lie outside the
                     // window).
@@ -431,11 +431,9 @@ impl<R: Read> StreamReader<R> {
                         self.last = Some((offset, self.buf[at - 1], range.clone()));
                         (self.buf[at - 1], range)
                     };
-                    if note.is_some() {
-                        self.pending = note;
-                    }
                     return Ok(Some(match applied {
-                        Applied::Nothing => match MessageType::from_byte(ty) {
+                        // (A noted message is `Nothing` by now, its note pending.)
+                        Applied::Nothing | Applied::Noted(_) => match MessageType::from_byte(ty) {
                             // A row of a subscription that cannot be decoded (said once,
                             // at the subscription): not a definition, and no row either.
                             Some(MessageType::Data) | None => continue,
@@ -529,13 +527,4 @@ impl<R: Read> StreamReader<R> {
             }
         }
     }
-}
-
-/// Whether a diagnostic notes a message that was applied all the same (so the message is
-/// given as an event, the note after it), rather than one left out.
-fn kept_despite(kind: &crate::DiagnosticKind) -> bool {
-    matches!(
-        kind,
-        crate::DiagnosticKind::OddFormat { .. } | crate::DiagnosticKind::KeptValue { .. }
-    )
 }

@@ -120,7 +120,7 @@ impl Conversion {
         let mut out = self.notes.clone();
         out.extend(self.skipped.lines(topics));
         if self.files.is_empty() {
-            out.push(window.nothing_written("Parquet", topics));
+            out.push(window.nothing_written("Parquet file", topics));
         }
         out
     }
