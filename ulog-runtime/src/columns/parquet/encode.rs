@@ -4,11 +4,15 @@
 //! thread ([`Encoder::inline`]) or on a pool of threads ([`Encoder::pool`]) that takes one
 //! table at a time each, so that one log uses every core; when the pool falls behind, the
 //! reading thread encodes batches too rather than wait for it, and it helps with the last
-//! ones once it has read everything. Either way, when the batches held
-//! by all tables pass the budget, the table holding most bytes per column is written as a
-//! row group (of those no other thread is encoding): each column chunk has a cost of its own
-//! (a column writer, its pages' headers, its metadata in the footer), so a table of many
-//! columns waits until its row group is large.
+//! ones once it has read everything.
+//!
+//! Where row groups fall is decided as the batches are given, from the bytes their rows
+//! take once columns, never from how far the threads have got: when the rows given and not
+//! yet planned into a row group pass the budget, the table holding most of them per column
+//! gets a row group at that point of its queue (each column chunk has a cost of its own: a
+//! column writer, its pages' headers, its metadata in the footer; so a table of many
+//! columns waits until its row group is large). The same log and options give the same
+//! files, byte for byte, on any number of threads.
 
 use std::collections::VecDeque;
 use std::io::Write;
@@ -64,6 +68,14 @@ pub(super) struct Stopped;
 /// Where a table's row group failed: its index, and why.
 pub(super) type Failure = (usize, ParquetError);
 
+/// What a table's queue holds, in the order it was given.
+enum Item {
+    /// Rows to make columns of.
+    Batch(RowBatch),
+    /// The rows so far, written as a row group.
+    RowGroup,
+}
+
 /// The tables of one conversion and where they are encoded.
 pub(super) struct Encoder<W: Output> {
     shared: Shared<W>,
@@ -77,7 +89,7 @@ struct Shared<W: Output> {
     work: Condvar,
     /// The reader waits here for the batches in flight to fall within their bound.
     room: Condvar,
-    /// Bytes of Arrow batches all tables may hold before one is written.
+    /// Bytes of rows (once columns) all tables may hold before one is written.
     budget: usize,
     /// Bytes of row batches waiting for a worker before the reader waits.
     in_flight_limit: usize,
@@ -88,21 +100,21 @@ struct State<W: Output> {
     /// Tables with batches waiting and no worker on them.
     ready: VecDeque<usize>,
     in_flight: usize,
-    /// The sum of the slots' `memory`.
-    held: usize,
+    /// The sum of the slots' `unplanned`.
+    unplanned: usize,
     /// No batch will come any more.
     done: bool,
     failure: Option<Failure>,
 }
 
 struct Slot<W: Output> {
-    queue: VecDeque<RowBatch>,
+    queue: VecDeque<Item>,
     /// The table, when no worker holds it.
     work: Option<TableWork<W>>,
     /// Whether it is in `ready`.
     queued: bool,
-    /// Bytes of Arrow batches it holds, as last measured.
-    memory: usize,
+    /// Bytes its rows take once columns, given since its last row group was planned.
+    unplanned: usize,
     /// Its columns (at least 1).
     columns: usize,
 }
@@ -126,7 +138,7 @@ impl<W: Output> Encoder<W> {
                     slots: Vec::new(),
                     ready: VecDeque::new(),
                     in_flight: 0,
-                    held: 0,
+                    unplanned: 0,
                     done: false,
                     failure: None,
                 }),
@@ -161,38 +173,19 @@ impl<W: Output> Encoder<W> {
             queue: VecDeque::new(),
             work: Some(work),
             queued: false,
-            memory: 0,
+            unplanned: 0,
             columns,
         });
         st.slots.len() - 1
     }
 
-    /// Gives table `t` a batch: encoded now (inline) or by a worker (waiting while too many
-    /// bytes are in flight). The first failure of any table is returned from then on.
+    /// Gives table `t` a batch, and plans the row groups its rows call for: encoded now
+    /// (inline) or by a worker (waiting while too many bytes are in flight). The first
+    /// failure of any table is returned from then on.
     pub(super) fn push(&self, t: usize, batch: RowBatch) -> Result<(), Stopped> {
-        if self.threads == 0 {
-            let mut st = self.lock();
-            if st.failure.is_some() {
-                return Err(Stopped);
-            }
-            let mut work = st.slots[t].work.take().expect("inline: always held");
-            let result = work.append(batch);
-            st.slots[t].work = Some(work);
-            if let Err(e) = result {
-                st.fail(t, e);
-                return Err(Stopped);
-            }
-            st.measure(t);
-            return match self.within_budget(st) {
-                Ok(_) => Ok(()),
-                Err((k, e)) => {
-                    self.lock().fail(k, e);
-                    Err(Stopped)
-                }
-            };
-        }
         let mut st = self.lock();
-        while st.in_flight > self.shared.in_flight_limit && st.failure.is_none() {
+        while self.threads > 0 && st.in_flight > self.shared.in_flight_limit && st.failure.is_none()
+        {
             // Rather than wait for the workers, encode a batch of theirs on this thread.
             let (next, worked) = self.step(st)?;
             st = if worked {
@@ -207,13 +200,33 @@ impl<W: Output> Encoder<W> {
         if st.failure.is_some() {
             return Err(Stopped);
         }
+        let bytes = batch.rows() * batch.spec().stored_row_size();
         st.in_flight += batch.memory();
-        let slot = &mut st.slots[t];
-        slot.queue.push_back(batch);
-        if slot.work.is_some() && !slot.queued {
-            slot.queued = true;
-            st.ready.push_back(t);
-            self.shared.work.notify_one();
+        st.slots[t].unplanned += bytes;
+        st.unplanned += bytes;
+        st.enqueue(t, Item::Batch(batch), &self.shared.work);
+        // While the rows given pass the budget, the table holding most bytes per column
+        // gets a row group after what it was given.
+        while st.unplanned > self.shared.budget {
+            let Some(k) = (0..st.slots.len())
+                .filter(|&k| st.slots[k].unplanned > 0)
+                .max_by_key(|&k| st.slots[k].unplanned / st.slots[k].columns)
+            else {
+                break;
+            };
+            let planned = std::mem::take(&mut st.slots[k].unplanned);
+            st.unplanned -= planned;
+            st.enqueue(k, Item::RowGroup, &self.shared.work);
+        }
+        if self.threads == 0 {
+            // Inline: what was given is encoded now, on this thread.
+            loop {
+                let (next, worked) = self.step(st)?;
+                if !worked {
+                    break;
+                }
+                st = next;
+            }
         }
         Ok(())
     }
@@ -243,9 +256,9 @@ impl<W: Output> Encoder<W> {
         }
     }
 
-    /// One step of a worker: the next ready table's next batch encoded (and a row group
-    /// written if the tables then hold more than the budget). Whether there was a ready
-    /// table; [`Stopped`] if a table failed (the failure is kept, every thread woken).
+    /// One step of a worker: the next ready table's next batch encoded, or its row group
+    /// written. Whether there was a ready table; [`Stopped`] if a table failed (the failure
+    /// is kept, every thread woken).
     fn step<'a>(
         &'a self,
         mut st: MutexGuard<'a, State<W>>,
@@ -255,19 +268,17 @@ impl<W: Output> Encoder<W> {
         };
         let slot = &mut st.slots[t];
         slot.queued = false;
-        // Being written as a row group by another thread, which requeues it after.
-        let Some(mut work) = slot.work.take() else {
-            return Ok((st, true));
-        };
-        let Some(batch) = slot.queue.pop_front() else {
+        // A table is ready only while no worker holds it (`enqueue`, `requeue`).
+        let mut work = slot.work.take().expect("a ready table is idle");
+        let Some(item) = slot.queue.pop_front() else {
             slot.work = Some(work);
             return Ok((st, true));
         };
         drop(st);
-        // One batch at a time, the budget looked at after each: the row groups are as
-        // large as the budget lets them be, not as many batches as came at once.
-        let bytes = batch.memory();
-        let result = work.append(batch);
+        let (bytes, result) = match item {
+            Item::Batch(batch) => (batch.memory(), work.append(batch)),
+            Item::RowGroup => (0, work.flush()),
+        };
         st = self.lock();
         st.in_flight -= bytes;
         self.shared.room.notify_all();
@@ -278,45 +289,8 @@ impl<W: Output> Encoder<W> {
             self.wake_all();
             return Err(Stopped);
         }
-        st.measure(t);
-        let mut st = match self.within_budget(st) {
-            Ok(st) => st,
-            Err((k, e)) => {
-                self.lock().fail(k, e);
-                self.wake_all();
-                return Err(Stopped);
-            }
-        };
         st.requeue(t, &self.shared.work);
         Ok((st, true))
-    }
-
-    /// While the tables hold more than the budget, writes the table holding most bytes per
-    /// column, of those no other worker holds, as a row group (the fewer column chunks, the
-    /// less their fixed costs).
-    fn within_budget<'a>(
-        &'a self,
-        mut st: MutexGuard<'a, State<W>>,
-    ) -> Result<MutexGuard<'a, State<W>>, Failure> {
-        while st.held > self.shared.budget {
-            let Some(k) = (0..st.slots.len())
-                .filter(|&k| st.slots[k].work.is_some() && st.slots[k].memory > 0)
-                .max_by_key(|&k| st.slots[k].memory / st.slots[k].columns)
-            else {
-                break;
-            };
-            let mut work = st.slots[k].work.take().expect("idle");
-            drop(st);
-            let result = work.flush();
-            st = self.lock();
-            st.slots[k].work = Some(work);
-            if let Err(e) = result {
-                return Err((k, e));
-            }
-            st.measure(k);
-            st.requeue(k, &self.shared.work);
-        }
-        Ok(st)
     }
 
     fn wake_all(&self) {
@@ -346,14 +320,13 @@ impl<W: Output> Encoder<W> {
 }
 
 impl<W: Output> State<W> {
-    /// Re-reads the memory table `t` holds (it is idle).
-    fn measure(&mut self, t: usize) {
-        let now = self.slots[t].work.as_ref().map_or(0, |w| w.table.memory());
-        self.held = self.held - self.slots[t].memory + now;
-        self.slots[t].memory = now;
+    /// Adds `item` to table `t`'s queue, and makes the table ready if it is idle.
+    fn enqueue(&mut self, t: usize, item: Item, work: &Condvar) {
+        self.slots[t].queue.push_back(item);
+        self.requeue(t, work);
     }
 
-    /// Makes idle table `t` ready again if batches came for it meanwhile.
+    /// Makes idle table `t` ready again if items came for it meanwhile.
     fn requeue(&mut self, t: usize, work: &Condvar) {
         let slot = &mut self.slots[t];
         if !slot.queue.is_empty() && !slot.queued && slot.work.is_some() {

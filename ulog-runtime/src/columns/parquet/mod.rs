@@ -55,9 +55,12 @@ pub struct ParquetOptions {
     pub zstd_level: i32,
     /// Most rows in one row group.
     pub row_group_rows: usize,
-    /// Memory for the rows waiting for their row group, all tables of one log together:
-    /// when they pass it, the table holding most bytes per column is encoded and written as
-    /// a row group. A conversion's memory is this, plus while a row group is encoded one
+    /// Memory for the rows waiting for their row group, all tables of one log together
+    /// (the bytes the rows take once columns): when they pass it, the table holding most
+    /// bytes per column is encoded and written as a row group. Where row groups fall is
+    /// decided from the rows as they are read, not from how far the encoding threads have
+    /// got: the same log and options give the same files, byte for byte, on any number of
+    /// threads. A conversion's memory is this, plus while a row group is encoded one
     /// column chunk's encoded pages at a time (row groups are encoded a column at a time)
     /// and a ZSTD context per encoding thread, plus per table the batch being filled
     /// ([`ParquetOptions::batch_bytes`]) and the footer metadata of its row groups so far,

@@ -1062,6 +1062,51 @@ fn a_reader_and_a_worker_encoding_side_by_side_keep_each_tables_rows_in_order() 
     std::fs::remove_dir_all(&root).unwrap();
 }
 
+/// Where row groups fall depends on the log and the options only: converted inline, with
+/// one worker or with three (the reader then encoding some batches itself), and twice
+/// with each, a log gives the same files byte for byte, each of many row groups.
+#[test]
+fn the_same_log_gives_the_same_files_on_any_number_of_threads() {
+    let bytes = log_bytes(60_000);
+    let root = temp("same-files");
+    let mut outputs = Vec::new();
+    for (run, encoders) in [0, 1, 3, 0, 1, 3].into_iter().enumerate() {
+        let options = ParquetOptions {
+            buffer_bytes: 16 << 10,
+            batch_bytes: 1 << 10,
+            encoders: Some(encoders),
+            ..ParquetOptions::default()
+        };
+        let conv = Converter::new(root.join(run.to_string()), options)
+            .convert_reader(&bytes[..], "f.ulg")
+            .unwrap();
+        let files: Vec<(String, Vec<u8>)> = conv
+            .files
+            .iter()
+            .map(|f| {
+                let name = f.path.file_name().unwrap().to_string_lossy().into_owned();
+                (name, std::fs::read(&f.path).unwrap())
+            })
+            .collect();
+        assert_eq!(files.len(), 3, "two battery instances and a gyro");
+        for f in conv.files.iter().filter(|f| f.topic == "battery") {
+            let (.., groups) = read(&f.path);
+            assert!(groups > 5, "{}: {groups} row groups", f.path.display());
+        }
+        outputs.push((encoders, files));
+    }
+    let (first, expected) = &outputs[0];
+    for (encoders, files) in &outputs[1..] {
+        for ((name, want), (_, got)) in expected.iter().zip(files) {
+            assert!(
+                want == got,
+                "{name}: {encoders} encoders wrote other bytes than {first}"
+            );
+        }
+    }
+    std::fs::remove_dir_all(&root).unwrap();
+}
+
 /// A log file's SHA-256 is the same however it is taken: as the file is read (no encoder
 /// thread, or one), or on a thread of its own (two encoders or more).
 #[test]
