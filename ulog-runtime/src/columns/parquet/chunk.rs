@@ -1,7 +1,8 @@
 //! One column chunk of a row group: a column's values, from every batch of the row group,
 //! encoded by parquet-rs's column writer (PLAIN values, statistics, the page index) into
 //! pages that are compressed here, with one ZSTD context a thread for every chunk it
-//! writes.
+//! writes. A `FLOAT` column's statistics are taken from its pages here too
+//! ([`super::statistics`]).
 //!
 //! parquet-rs's own compression makes a ZSTD compression and a decompression context for
 //! each column chunk. Making one costs more than compressing a small chunk: each runs
@@ -15,7 +16,7 @@ use std::cell::RefCell;
 use std::io::Write;
 
 use bytes::Bytes;
-use parquet::basic::{Compression, ZstdLevel};
+use parquet::basic::{Compression, Encoding, Type, ZstdLevel};
 use parquet::column::page::{CompressedPage, Page, PageWriteSpec, PageWriter};
 use parquet::column::writer::{ColumnCloseResult, ColumnWriter, get_column_writer};
 use parquet::data_type::ByteArray;
@@ -24,7 +25,17 @@ use parquet::file::properties::WriterPropertiesPtr;
 use parquet::file::writer::{SerializedPageWriter, SerializedRowGroupWriter, TrackedWrite};
 use parquet::schema::types::ColumnDescPtr;
 
+use super::statistics::FloatStatistics;
 use crate::columns::ColumnValues;
+
+/// The column writers' properties of a table: as the file's, without compression.
+pub(super) struct ChunkProperties {
+    /// For the columns whose statistics parquet-rs takes.
+    pub(super) parquet: WriterPropertiesPtr,
+    /// For `FLOAT` columns, when their statistics are taken here (statistics off, and the
+    /// values PLAIN: no dictionary); `page_index`: whether a column index is made.
+    pub(super) float: Option<(WriterPropertiesPtr, bool)>,
+}
 
 thread_local! {
     /// This thread's ZSTD context, and the level it compresses at.
@@ -57,6 +68,8 @@ fn zstd_error(e: std::io::Error) -> ParquetError {
 struct CompressingPages<'a> {
     out: &'a mut TrackedWrite<Vec<u8>>,
     zstd: &'a mut zstd::bulk::Compressor<'static>,
+    /// The statistics taken here, of a `FLOAT` column's data pages.
+    float: Option<&'a mut FloatStatistics>,
 }
 
 impl PageWriter for CompressingPages<'_> {
@@ -73,14 +86,25 @@ impl PageWriter for CompressingPages<'_> {
                 def_level_encoding,
                 rep_level_encoding,
                 statistics,
-            } => Page::DataPage {
-                buf: compressed(buf, self.zstd)?,
-                num_values: *num_values,
-                encoding: *encoding,
-                def_level_encoding: *def_level_encoding,
-                rep_level_encoding: *rep_level_encoding,
-                statistics: statistics.clone(),
-            },
+            } => {
+                if let Some(stats) = self.float.as_deref_mut() {
+                    if *encoding != Encoding::PLAIN {
+                        return Err(ParquetError::General(format!(
+                            "a FLOAT data page encoded {encoding}: its statistics are taken \
+                             from PLAIN values only"
+                        )));
+                    }
+                    stats.page(buf, *num_values)?;
+                }
+                Page::DataPage {
+                    buf: compressed(buf, self.zstd)?,
+                    num_values: *num_values,
+                    encoding: *encoding,
+                    def_level_encoding: *def_level_encoding,
+                    rep_level_encoding: *rep_level_encoding,
+                    statistics: statistics.clone(),
+                }
+            }
             Page::DictionaryPage {
                 buf,
                 num_values,
@@ -114,17 +138,25 @@ impl PageWriter for CompressingPages<'_> {
 pub(super) fn write_chunk<'b, W: Write + Send>(
     row_group: &mut SerializedRowGroupWriter<'_, W>,
     descr: ColumnDescPtr,
-    props: &WriterPropertiesPtr,
+    props: &ChunkProperties,
     level: i32,
     batches: impl Iterator<Item = &'b ColumnValues>,
 ) -> Result<(), ParquetError> {
+    let float = props
+        .float
+        .as_ref()
+        .filter(|_| descr.physical_type() == Type::FLOAT);
+    let mut stats = float.map(|_| FloatStatistics::default());
+    let signed = descr.sort_order().is_signed();
     let mut out = TrackedWrite::new(Vec::new());
     let close = with_zstd(level, |zstd| {
         let pages = CompressingPages {
             out: &mut out,
             zstd,
+            float: stats.as_mut(),
         };
-        let mut writer = get_column_writer(descr, props.clone(), Box::new(pages));
+        let column_props = float.map_or(&props.parquet, |(p, _)| p).clone();
+        let mut writer = get_column_writer(descr, column_props, Box::new(pages));
         let mut widened = Widened::default();
         for values in batches {
             write_values(&mut writer, values, &mut widened)?;
@@ -139,10 +171,16 @@ pub(super) fn write_chunk<'b, W: Write + Send>(
         column_index,
         offset_index,
     } = close;
-    let metadata = metadata
+    let mut metadata = metadata
         .into_builder()
-        .set_compression(Compression::ZSTD(ZstdLevel::try_new(level)?))
-        .build()?;
+        .set_compression(Compression::ZSTD(ZstdLevel::try_new(level)?));
+    let mut column_index = column_index;
+    if let (Some(stats), Some((_, page_index))) = (stats, float) {
+        let (statistics, index) = stats.finish(signed, *page_index)?;
+        metadata = metadata.set_statistics(statistics);
+        column_index = index;
+    }
+    let metadata = metadata.build()?;
     let chunk = Bytes::from(out.into_inner()?);
     row_group.append_column(
         &chunk,

@@ -28,6 +28,7 @@ mod chunk;
 mod convert;
 mod encode;
 mod fleet;
+mod statistics;
 #[cfg(test)]
 mod tests;
 
@@ -37,7 +38,7 @@ use parquet::arrow::ArrowWriter;
 use parquet::basic::{Compression, ZstdLevel};
 use parquet::errors::ParquetError;
 use parquet::file::metadata::KeyValue;
-use parquet::file::properties::{EnabledStatistics, WriterProperties, WriterPropertiesPtr};
+use parquet::file::properties::{EnabledStatistics, WriterProperties};
 use parquet::file::writer::SerializedFileWriter;
 
 pub use convert::{Conversion, ConvertError, Converter, WrittenFile};
@@ -123,11 +124,27 @@ impl ParquetOptions {
     }
 
     /// The properties without compression, for column writers whose pages are compressed
-    /// by [`chunk`].
-    fn chunk_properties(&self) -> WriterProperties {
-        self.builder(Vec::new())
-            .set_compression(Compression::UNCOMPRESSED)
-            .build()
+    /// by [`chunk`]; and for `FLOAT` columns, whose statistics are taken there from PLAIN
+    /// pages ([`statistics`]), the same without statistics (unless a dictionary is asked
+    /// for).
+    fn chunk_properties(&self) -> chunk::ChunkProperties {
+        let uncompressed = || {
+            self.builder(Vec::new())
+                .set_compression(Compression::UNCOMPRESSED)
+        };
+        #[cfg(test)]
+        let ours = !statistics::BY_PARQUET_RS.get();
+        #[cfg(not(test))]
+        let ours = true;
+        chunk::ChunkProperties {
+            parquet: std::sync::Arc::new(uncompressed().build()),
+            float: (ours && !self.dictionary).then(|| {
+                let props = uncompressed()
+                    .set_statistics_enabled(EnabledStatistics::None)
+                    .build();
+                (std::sync::Arc::new(props), self.page_statistics)
+            }),
+        }
     }
 
     fn builder(
@@ -389,7 +406,7 @@ struct Table<W: Write + Send> {
     out: Option<(W, WriterProperties)>,
     properties_error: Option<ParquetError>,
     /// The column writers' properties: as the file's, without compression.
-    chunk_properties: WriterPropertiesPtr,
+    chunk_properties: std::sync::Arc<chunk::ChunkProperties>,
     zstd_level: i32,
     row_group_rows: usize,
     /// Batches of the next row group.

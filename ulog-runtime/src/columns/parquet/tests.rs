@@ -1107,6 +1107,108 @@ fn the_same_log_gives_the_same_files_on_any_number_of_threads() {
     std::fs::remove_dir_all(&root).unwrap();
 }
 
+/// A log of awkward floats, `rows` rows: each column more than a 1 MiB page at 300,000
+/// rows (one row group), their pages' bounds rising, falling, both infinities, NaN of
+/// either sign and payload (a page of nothing else), and zeros of one sign or both.
+fn awkward_floats_log(rows: u32) -> Vec<u8> {
+    #[derive(ULog)]
+    struct Awkward {
+        timestamp: u64,
+        rising: f32,
+        falling: f32,
+        mixed: f32,
+        nan_then_numbers: f32,
+        zeros: f32,
+        negative_zero: f32,
+    }
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    let topic = w.topic::<Awkward>(0).unwrap();
+    for i in 0..rows {
+        let f = i as f32;
+        let mixed = match i % 7 {
+            0 => f32::NAN,
+            1 => -0.0,
+            2 => 0.0,
+            3 => f32::INFINITY,
+            4 => f32::NEG_INFINITY,
+            5 => f,
+            _ => -f * 1e-3,
+        };
+        let nan = f32::from_bits(0x7fc0_0000 | (i & 0xff) | ((i % 3 == 0) as u32) << 31);
+        let row = Awkward {
+            timestamp: u64::from(i),
+            rising: f * 0.5 - 1000.0,
+            falling: -f,
+            mixed,
+            nan_then_numbers: if i < rows * 2 / 3 { nan } else { f },
+            zeros: if i % 2 == 0 { 0.0 } else { -0.0 },
+            negative_zero: -0.0,
+        };
+        w.write(&topic, &row).unwrap();
+    }
+    w.into_inner()
+}
+
+/// Every file of a conversion of `bytes` (inline), by name; `FLOAT` statistics by
+/// parquet-rs if `by_parquet_rs`, else from the pages.
+fn converted(bytes: &[u8], page_statistics: bool, by_parquet_rs: bool) -> Vec<(String, Vec<u8>)> {
+    let root = temp(&format!("float-stats-{page_statistics}-{by_parquet_rs}"));
+    super::statistics::BY_PARQUET_RS.set(by_parquet_rs);
+    let options = ParquetOptions {
+        encoders: Some(0),
+        page_statistics,
+        ..ParquetOptions::default()
+    };
+    let conv = Converter::new(&root, options).convert_reader(bytes, "f.ulg");
+    super::statistics::BY_PARQUET_RS.set(false);
+    let files = conv
+        .unwrap()
+        .files
+        .iter()
+        .map(|f| {
+            let name = f.path.file_name().unwrap().to_string_lossy().into_owned();
+            (name, std::fs::read(&f.path).unwrap())
+        })
+        .collect();
+    std::fs::remove_dir_all(&root).unwrap();
+    files
+}
+
+/// `FLOAT` statistics taken from the pages ([`super::statistics`]) are parquet-rs's own:
+/// every corpus log, and a log of awkward floats with page statistics and without, gives
+/// the same files byte for byte either way.
+#[test]
+fn float_statistics_from_the_pages_are_parquet_rs_own_byte_for_byte() {
+    let mut logs: Vec<(String, Vec<u8>, bool)> = crate::corpus::corpus_files()
+        .into_iter()
+        .map(|p| {
+            (
+                crate::corpus::short_name(&p),
+                std::fs::read(&p).unwrap(),
+                true,
+            )
+        })
+        .collect();
+    let awkward = awkward_floats_log(300_000);
+    logs.push(("awkward floats".to_owned(), awkward.clone(), true));
+    logs.push((
+        "awkward floats, chunk statistics".to_owned(),
+        awkward,
+        false,
+    ));
+    for (log, bytes, page_statistics) in &logs {
+        let ours = converted(bytes, *page_statistics, false);
+        let reference = converted(bytes, *page_statistics, true);
+        assert_eq!(ours.len(), reference.len(), "{log}");
+        for ((name, got), (_, want)) in ours.iter().zip(&reference) {
+            assert!(
+                got == want,
+                "{log}: {name} differs from parquet-rs's statistics"
+            );
+        }
+    }
+}
+
 /// A log file's SHA-256 is the same however it is taken: as the file is read (no encoder
 /// thread, or one), or on a thread of its own (two encoders or more).
 #[test]
