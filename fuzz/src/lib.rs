@@ -1,13 +1,14 @@
 //! What each fuzz target checks, one function per target, taking the fuzzer's bytes. The
 //! targets in `fuzz_targets/` call these; `tests/tests/integration/robustness.rs` runs the same
 //! functions on every saved input of `tests/fuzz_regressions/<target>/` under
-//! `cargo test` on stable. Nothing here but `ulog_runtime`, `serde_json` and std, so both can
-//! compile it.
+//! `cargo test` on stable. Nothing here but `ulog_runtime`, `serde_json`, `parquet`,
+//! `bytes` and std, so both can compile it.
 //!
 //! A check panics (which the fuzzer reports) when the library panics, hangs or
 //! breaks a promise: the streaming reader not yielding what the whole-file reader yields, a
 //! format that does not print back to itself, a layout whose fields leave it, a decoded
-//! value that does not encode back, a writer whose accepted operations do not read back.
+//! value that does not encode back, a writer whose accepted operations do not read back, a
+//! Parquet file that does not read back with its rows and its statistics.
 
 #![allow(missing_docs, clippy::missing_panics_doc)]
 
@@ -710,5 +711,76 @@ pub fn rewrite(data: &[u8]) {
             "{:?}",
             cut.diagnostics()
         );
+    }
+}
+
+/// The Parquet writer over the whole-file reader: every topic instance that can be read is
+/// written (to memory, in row groups of a few batches), reads back with as many rows and row
+/// groups as the writer says, and each `FLOAT` column chunk's statistics are those of its
+/// values (IEEE 754 total order, NaN left out unless there is nothing else, NaN counted).
+pub fn parquet(data: &[u8]) {
+    use parquet::column::reader::ColumnReader;
+    use parquet::file::reader::{FileReader, SerializedFileReader};
+    use parquet::file::statistics::Statistics;
+    use ulog_runtime::columns::parquet::{LogIdentity, ParquetOptions, TableError, write_topic};
+    let Ok(log) = Log::from_slice(data) else {
+        return;
+    };
+    let identity = LogIdentity::of_log(&log, "f.ulg");
+    let options = ParquetOptions {
+        batch_bytes: 1 << 10,
+        buffer_bytes: 16 << 10,
+        ..ParquetOptions::default()
+    };
+    for instance in log.instances(&[]) {
+        let (name, multi_id) = (&instance[0].name, instance[0].multi_id);
+        let mut out = Vec::new();
+        let written = match write_topic(&log, name, multi_id, &identity, &mut out, &options) {
+            Ok(w) => w,
+            Err(TableError::NoSuchInstance { .. }) => continue,
+            Err(e) => panic!("{name} #{multi_id}: {e}"),
+        };
+        let file = SerializedFileReader::new(bytes::Bytes::from(out)).expect("the file reads");
+        let meta = file.metadata();
+        assert_eq!(
+            meta.file_metadata().num_rows() as usize,
+            written.rows,
+            "{name}"
+        );
+        assert_eq!(meta.num_row_groups(), written.row_groups, "{name}");
+        for g in 0..meta.num_row_groups() {
+            let group = file.get_row_group(g).expect("a row group");
+            for c in 0..meta.row_group(g).num_columns() {
+                let chunk = meta.row_group(g).column(c);
+                let Ok(ColumnReader::FloatColumnReader(mut reader)) = group.get_column_reader(c)
+                else {
+                    continue;
+                };
+                let mut values = Vec::new();
+                let rows = chunk.num_values() as usize;
+                while values.len() < rows {
+                    let (records, ..) = reader
+                        .read_records(rows - values.len(), None, None, &mut values)
+                        .expect("the values read");
+                    assert!(records > 0, "{name}: a FLOAT column chunk ends early");
+                }
+                let numbers: Vec<f32> = values.iter().copied().filter(|v| !v.is_nan()).collect();
+                let pool = if numbers.is_empty() {
+                    &values
+                } else {
+                    &numbers
+                };
+                let min = pool.iter().copied().min_by(f32::total_cmp);
+                let max = pool.iter().copied().max_by(f32::total_cmp);
+                let Some(Statistics::Float(s)) = chunk.statistics() else {
+                    panic!("{name}: a FLOAT column chunk without statistics");
+                };
+                let bits = |v: Option<&f32>| v.map(|v| v.to_bits());
+                assert_eq!(bits(s.min_opt()), min.map(f32::to_bits), "{name} min");
+                assert_eq!(bits(s.max_opt()), max.map(f32::to_bits), "{name} max");
+                let nans = (values.len() - numbers.len()) as u64;
+                assert_eq!(s.nan_count_opt(), Some(nans), "{name} NaN count");
+            }
+        }
     }
 }

@@ -687,7 +687,7 @@ type FuzzCheck = fn(&[u8]);
 #[test]
 fn fuzz_regressions_pass() {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fuzz_regressions");
-    let targets: [(&str, FuzzCheck); 9] = [
+    let targets: [(&str, FuzzCheck); 10] = [
         ("whole_file", fuzz_checks::whole_file),
         ("stream_chunks", fuzz_checks::stream_chunks),
         ("format_roundtrip", fuzz_checks::format_roundtrip),
@@ -697,6 +697,7 @@ fn fuzz_regressions_pass() {
         ("codegen_text", fuzz_checks::codegen_text),
         ("writer_ops", fuzz_checks::writer_ops),
         ("rewrite", fuzz_checks::rewrite),
+        ("parquet", fuzz_checks::parquet),
     ];
     let mut ran = 0;
     for (target, check) in targets {
@@ -714,6 +715,21 @@ fn fuzz_regressions_pass() {
     }
     assert!(ran > 0, "regression inputs under {}", root.display());
     eprintln!("{ran} fuzz regressions pass");
+}
+
+/// The Parquet fuzz check on every corpus log: each topic instance written, read back with
+/// its rows and row groups, its `FLOAT` statistics those of its values.
+#[test]
+fn the_parquet_fuzz_check_passes_on_every_corpus_log() {
+    for path in corpus_files() {
+        let data = std::fs::read(&path).unwrap();
+        let outcome = std::panic::catch_unwind(|| fuzz_checks::parquet(&data));
+        assert!(
+            outcome.is_ok(),
+            "{}: the parquet check fails",
+            short_name(&path)
+        );
+    }
 }
 
 /// Every single-bit flip of the size field of rows of every clean corpus log loses at most
