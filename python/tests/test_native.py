@@ -313,6 +313,38 @@ def test_the_package_shows_only_its_public_names():
     assert all(callable(getattr(spark, n)) for n in spark.__all__)
 
 
+def test_ulog_spark_is_at_hand_after_import_ulog():
+    # In a fresh interpreter, so that no earlier test has imported the submodule.
+    code = "import ulog, sys; assert 'ulog.spark' not in sys.modules; print(sorted(ulog.spark.__all__))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "['convert', 'metadata', 'topics']"
+    with pytest.raises(AttributeError, match="no attribute 'sparks'"):
+        ulog.sparks
+
+
+def test_a_log_closes_at_the_end_of_a_with_block():
+    from conftest import corpus_files
+
+    files = corpus_files()
+    if not files:
+        pytest.skip("no corpus")
+    with ulog.open(files[0]) as log:
+        assert not log.closed
+        first = next(t for t in log.topics() if t["rows"] > 0)
+        table = log.table(first["name"], first["multi_id"])
+    assert log.closed
+    with pytest.raises(ValueError, match="the log is closed"):
+        log.topics()
+    with pytest.raises(ValueError, match="the log is closed"):
+        log.name
+    # A table made before keeps its columns.
+    import pyarrow
+
+    assert pyarrow.table(table).num_rows == first["rows"] > 0
+    log.close()  # closing again is harmless
+    assert log.closed
+
+
 def test_the_start_date_is_the_headers_or_the_first_gps_fixs(capsys):
     from conftest import corpus_files, pyulog_start_utc
 

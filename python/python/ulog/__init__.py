@@ -7,7 +7,7 @@
   pyarrow, Polars and DuckDB take without a copy.
 - ``ulog.to_parquet(paths, out_dir)``: per-topic Parquet files and a ``metadata.json`` per
   log, as ``ulog parquet`` writes them.
-- ``ulog.spark``: the same on Apache Spark (needs pyspark).
+- ``ulog.spark``: the same on Apache Spark (needs pyspark; imported on first use).
 - The ``ulog`` command-line tool (``python -m ulog``).
 """
 
@@ -33,3 +33,13 @@ __all__ = [
     "open",
     "to_parquet",
 ]
+
+
+def __getattr__(name: str):
+    # `ulog.spark` at hand after `import ulog`, as the other names are: imported on first use
+    # (it needs pyarrow, and pyspark to run).
+    if name == "spark":
+        import importlib
+
+        return importlib.import_module(".spark", __name__)
+    raise AttributeError(f"module 'ulog' has no attribute {name!r}")

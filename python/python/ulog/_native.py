@@ -73,12 +73,40 @@ class Table:
         return polars.DataFrame(self)
 
 
+class _Closed:
+    """What a closed ``Log`` holds instead of its reader: any use is a ``ValueError``."""
+
+    def __getattr__(self, name: str) -> Any:
+        raise ValueError("the log is closed")
+
+
+_CLOSED = _Closed()
+
+
 class Log:
     """A log read by the Rust reader: every intact message of a damaged file, with what
-    recovery skipped in ``diagnostics``. Open one with ``ulog.open``."""
+    recovery skipped in ``diagnostics``. Open one with ``ulog.open``; ``with ulog.open(path)
+    as log:`` closes it at the end of the block."""
 
     def __init__(self, native: "_ulog.Log"):
         self._native = native
+
+    def close(self) -> None:
+        """Lets the log go: its memory map (or its bytes) is released once nothing else
+        holds it, and tables already made keep their columns. Using the log afterwards
+        raises ``ValueError``, as a closed file does."""
+        self._native = _CLOSED
+
+    @property
+    def closed(self) -> bool:
+        """Whether ``close`` was called."""
+        return self._native is _CLOSED
+
+    def __enter__(self) -> "Log":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
 
     @property
     def name(self) -> str:
