@@ -137,11 +137,16 @@ impl fmt::Display for Analysis {
             )?,
             _ => writeln!(f, "Vibration: -")?,
         }
-        writeln!(
-            f,
-            "Non-default parameters: {}",
-            self.non_default_params.len()
-        )?;
+        // Unknown (not 0) when the log has no defaults to compare with.
+        if self.missing.iter().any(|m| m.fact == "non_default_params") {
+            writeln!(f, "Non-default parameters: -")?;
+        } else {
+            writeln!(
+                f,
+                "Non-default parameters: {}",
+                self.non_default_params.len()
+            )?;
+        }
         for r in &self.step_response {
             let at = |s: f64| {
                 r.response

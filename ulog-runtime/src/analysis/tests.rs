@@ -422,6 +422,10 @@ fn a_normal_flight_reports_its_facts_and_nothing_wrong() {
         .map(|p| (p.name.as_str(), p.value, p.default))
         .collect();
     assert_eq!(non_default, [("MC_ROLL_P", 7.0, 6.5)]);
+    assert!(
+        a.to_string().contains("\nNon-default parameters: 1\n"),
+        "{a}"
+    );
     let z = a
         .field_stats
         .iter()
@@ -732,4 +736,17 @@ fn field_statistics_equal_each_fields_own_over_its_finite_values() {
             );
         }
     }
+}
+
+/// A log without default parameters cannot say which parameters differ from them: the text
+/// gives no count (not 0), and names the fact under "Not in the log".
+#[test]
+fn without_defaults_the_non_default_parameters_are_unknown_not_none() {
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    w.parameter("MC_ROLL_P", ParamValue::Float(7.0)).unwrap();
+    let log = Log::from_vec(w.into_inner()).unwrap();
+    let a = Analysis::of_log(&log);
+    let text = a.to_string();
+    assert!(text.contains("\nNon-default parameters: -\n"), "{text}");
+    assert!(text.contains("non_default_params"), "{text}");
 }
