@@ -716,9 +716,11 @@ pub fn rewrite(data: &[u8]) {
 
 /// The Parquet writer over the whole-file reader: every topic instance that can be read is
 /// written (to memory, in row groups of a few batches), reads back with as many rows and row
-/// groups as the writer says, and each `FLOAT` column chunk's statistics are those of its
-/// values (IEEE 754 total order, NaN left out unless there is nothing else, NaN counted).
+/// groups as the writer says, and each `FLOAT` and `DOUBLE` column chunk's statistics are
+/// those of its values in the type-defined order the footer gives them (NaN left out, none
+/// if there is nothing else; a zero minimum -0.0, a zero maximum +0.0; NaN counted).
 pub fn parquet(data: &[u8]) {
+    use parquet::basic::{ColumnOrder, SortOrder};
     use parquet::column::reader::ColumnReader;
     use parquet::file::reader::{FileReader, SerializedFileReader};
     use parquet::file::statistics::Statistics;
@@ -731,6 +733,17 @@ pub fn parquet(data: &[u8]) {
         batch_bytes: 1 << 10,
         buffer_bytes: 16 << 10,
         ..ParquetOptions::default()
+    };
+    // Bounds by the rules, as bits of `f64`s, and the NaN count.
+    let expected = |values: &[f64]| {
+        let numbers: Vec<f64> = values.iter().copied().filter(|v| !v.is_nan()).collect();
+        let lo = numbers.iter().copied().reduce(f64::min);
+        let hi = numbers.iter().copied().reduce(f64::max);
+        let zero = |v: f64, signed: f64| if v == 0.0 { signed } else { v };
+        let bounds = lo
+            .zip(hi)
+            .map(|(lo, hi)| (zero(lo, -0.0).to_bits(), zero(hi, 0.0).to_bits()));
+        (bounds, Some((values.len() - numbers.len()) as u64))
     };
     for instance in log.instances(&[]) {
         let (name, multi_id) = (&instance[0].name, instance[0].multi_id);
@@ -748,38 +761,56 @@ pub fn parquet(data: &[u8]) {
             "{name}"
         );
         assert_eq!(meta.num_row_groups(), written.row_groups, "{name}");
+        let orders = meta.file_metadata().column_orders().expect("column orders");
         for g in 0..meta.num_row_groups() {
             let group = file.get_row_group(g).expect("a row group");
-            for c in 0..meta.row_group(g).num_columns() {
+            for (c, order) in orders.iter().enumerate() {
                 let chunk = meta.row_group(g).column(c);
-                let Ok(ColumnReader::FloatColumnReader(mut reader)) = group.get_column_reader(c)
-                else {
-                    continue;
-                };
-                let mut values = Vec::new();
                 let rows = chunk.num_values() as usize;
-                while values.len() < rows {
-                    let (records, ..) = reader
-                        .read_records(rows - values.len(), None, None, &mut values)
-                        .expect("the values read");
-                    assert!(records > 0, "{name}: a FLOAT column chunk ends early");
-                }
-                let numbers: Vec<f32> = values.iter().copied().filter(|v| !v.is_nan()).collect();
-                let pool = if numbers.is_empty() {
-                    &values
-                } else {
-                    &numbers
+                let values: Vec<f64> = match group.get_column_reader(c) {
+                    Ok(ColumnReader::FloatColumnReader(mut reader)) => {
+                        let mut values = Vec::new();
+                        while values.len() < rows {
+                            let (records, ..) = reader
+                                .read_records(rows - values.len(), None, None, &mut values)
+                                .expect("the values read");
+                            assert!(records > 0, "{name}: a FLOAT column chunk ends early");
+                        }
+                        values.into_iter().map(f64::from).collect()
+                    }
+                    Ok(ColumnReader::DoubleColumnReader(mut reader)) => {
+                        let mut values = Vec::new();
+                        while values.len() < rows {
+                            let (records, ..) = reader
+                                .read_records(rows - values.len(), None, None, &mut values)
+                                .expect("the values read");
+                            assert!(records > 0, "{name}: a DOUBLE column chunk ends early");
+                        }
+                        values
+                    }
+                    _ => continue,
                 };
-                let min = pool.iter().copied().min_by(f32::total_cmp);
-                let max = pool.iter().copied().max_by(f32::total_cmp);
-                let Some(Statistics::Float(s)) = chunk.statistics() else {
-                    panic!("{name}: a FLOAT column chunk without statistics");
+                assert_eq!(
+                    *order,
+                    ColumnOrder::TYPE_DEFINED_ORDER(SortOrder::SIGNED),
+                    "{name}"
+                );
+                let got = match chunk.statistics() {
+                    Some(Statistics::Float(s)) => (
+                        s.min_opt()
+                            .zip(s.max_opt())
+                            .map(|(lo, hi)| (f64::from(*lo).to_bits(), f64::from(*hi).to_bits())),
+                        s.nan_count_opt(),
+                    ),
+                    Some(Statistics::Double(s)) => (
+                        s.min_opt()
+                            .zip(s.max_opt())
+                            .map(|(lo, hi)| (lo.to_bits(), hi.to_bits())),
+                        s.nan_count_opt(),
+                    ),
+                    other => panic!("{name}: a float column chunk's statistics {other:?}"),
                 };
-                let bits = |v: Option<&f32>| v.map(|v| v.to_bits());
-                assert_eq!(bits(s.min_opt()), min.map(f32::to_bits), "{name} min");
-                assert_eq!(bits(s.max_opt()), max.map(f32::to_bits), "{name} max");
-                let nans = (values.len() - numbers.len()) as u64;
-                assert_eq!(s.nan_count_opt(), Some(nans), "{name} NaN count");
+                assert_eq!(got, expected(&values), "{name}: column {c}'s statistics");
             }
         }
     }

@@ -272,6 +272,35 @@ def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
     assert not (tmp_path / "never").exists()
 
 
+def test_pyarrow_reads_the_float_columns_statistics(tmp_path):
+    # Every float column chunk's bounds, as pyarrow reads them (it ignores the IEEE 754
+    # total order parquet-rs 60 would declare): those of its values, NaN left out.
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+    from conftest import corpus_files
+
+    checked = 0
+    for path in corpus_files():
+        result = ulog.to_parquet(str(path), tmp_path / path.stem)[0]
+        for f in result.get("files", []):
+            pf = pq.ParquetFile(f["path"])
+            for g in range(pf.metadata.num_row_groups):
+                group = pf.read_row_group(g)
+                for c in range(pf.metadata.num_columns):
+                    chunk = pf.metadata.row_group(g).column(c)
+                    if chunk.physical_type not in ("FLOAT", "DOUBLE"):
+                        continue
+                    values = group.column(chunk.path_in_schema).to_numpy().astype(np.float64)
+                    numbers = values[~np.isnan(values)]
+                    stats = chunk.statistics
+                    assert stats.has_min_max == (numbers.size > 0), (f["path"], chunk.path_in_schema)
+                    if numbers.size:
+                        assert stats.min == numbers.min() and stats.max == numbers.max()
+                        checked += 1
+    if corpus_files():
+        assert checked > 1000
+
+
 def test_the_command_line_tool_ships_with_the_package():
     from conftest import corpus_dir
 

@@ -1,6 +1,6 @@
 //! Finding the corpus, its oracles, and what pyulog cannot see in it. Also compiled into
-//! `ulog-runtime`'s CLI test and its unit tests (by path, beside `files.rs` as
-//! `crate::files`), so it depends on nothing but `ulog_runtime`, `serde_json` and std.
+//! `ulog-runtime`'s CLI test (by path, beside `files.rs` as `crate::files`), so it depends on
+//! nothing but `ulog_runtime`, `serde_json` and std.
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};

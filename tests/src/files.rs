@@ -1,5 +1,5 @@
-//! Finding `.ulg` files: std only, so `build.rs` and `ulog-runtime`'s CLI and unit tests
-//! include this file by path too.
+//! Finding `.ulg` files: std only, so `build.rs` and `ulog-runtime`'s CLI test include this
+//! file by path too.
 
 use std::path::{Path, PathBuf};
 

@@ -74,13 +74,3 @@ pub use write::{WriteError, Writer, WriterOptions};
 #[cfg(all(doctest, feature = "parquet"))]
 #[doc = include_str!("../../README.md")]
 struct ReadmeDoctests;
-
-/// The corpus of real logs, for unit tests (the integration tests' own file, by path).
-#[cfg(all(test, feature = "parquet"))]
-#[allow(dead_code, unreachable_pub)]
-#[path = "../../tests/src/corpus.rs"]
-mod corpus;
-#[cfg(all(test, feature = "parquet"))]
-#[allow(dead_code, unreachable_pub)]
-#[path = "../../tests/src/files.rs"]
-mod files;

@@ -1,7 +1,7 @@
 //! One column chunk of a row group: a column's values, from every batch of the row group,
 //! encoded by parquet-rs's column writer (PLAIN values, statistics, the page index) into
 //! pages that are compressed here, with one ZSTD context a thread for every chunk it
-//! writes. A `FLOAT` column's statistics are taken from its pages here too
+//! writes. A `FLOAT` or `DOUBLE` column's statistics are taken from its pages here too
 //! ([`super::statistics`]).
 //!
 //! parquet-rs's own compression makes a ZSTD compression and a decompression context for
@@ -32,8 +32,8 @@ use crate::columns::ColumnValues;
 pub(super) struct ChunkProperties {
     /// For the columns whose statistics parquet-rs takes.
     pub(super) parquet: WriterPropertiesPtr,
-    /// For `FLOAT` columns, when their statistics are taken here (statistics off, and the
-    /// values PLAIN: no dictionary); `page_index`: whether a column index is made.
+    /// For `FLOAT` and `DOUBLE` columns, when their statistics are taken here (statistics
+    /// off, and the values PLAIN: no dictionary); and whether a column index is made.
     pub(super) float: Option<(WriterPropertiesPtr, bool)>,
 }
 
@@ -68,7 +68,7 @@ fn zstd_error(e: std::io::Error) -> ParquetError {
 struct CompressingPages<'a> {
     out: &'a mut TrackedWrite<Vec<u8>>,
     zstd: &'a mut zstd::bulk::Compressor<'static>,
-    /// The statistics taken here, of a `FLOAT` column's data pages.
+    /// The statistics taken here, of a `FLOAT` or `DOUBLE` column's data pages.
     float: Option<&'a mut FloatStatistics>,
 }
 
@@ -90,7 +90,7 @@ impl PageWriter for CompressingPages<'_> {
                 if let Some(stats) = self.float.as_deref_mut() {
                     if *encoding != Encoding::PLAIN {
                         return Err(ParquetError::General(format!(
-                            "a FLOAT data page encoded {encoding}: its statistics are taken \
+                            "a float data page encoded {encoding}: its statistics are taken \
                              from PLAIN values only"
                         )));
                     }
@@ -142,12 +142,12 @@ pub(super) fn write_chunk<'b, W: Write + Send>(
     level: i32,
     batches: impl Iterator<Item = &'b ColumnValues>,
 ) -> Result<(), ParquetError> {
+    let kind = descr.physical_type();
     let float = props
         .float
         .as_ref()
-        .filter(|_| descr.physical_type() == Type::FLOAT);
-    let mut stats = float.map(|_| FloatStatistics::default());
-    let signed = descr.sort_order().is_signed();
+        .filter(|_| matches!(kind, Type::FLOAT | Type::DOUBLE));
+    let mut stats = float.map(|_| FloatStatistics::new(kind));
     let mut out = TrackedWrite::new(Vec::new());
     let close = with_zstd(level, |zstd| {
         let pages = CompressingPages {
@@ -176,7 +176,7 @@ pub(super) fn write_chunk<'b, W: Write + Send>(
         .set_compression(Compression::ZSTD(ZstdLevel::try_new(level)?));
     let mut column_index = column_index;
     if let (Some(stats), Some((_, page_index))) = (stats, float) {
-        let (statistics, index) = stats.finish(signed, *page_index)?;
+        let (statistics, index) = stats.finish(*page_index)?;
         metadata = metadata.set_statistics(statistics);
         column_index = index;
     }

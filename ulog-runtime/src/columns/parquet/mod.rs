@@ -124,21 +124,17 @@ impl ParquetOptions {
     }
 
     /// The properties without compression, for column writers whose pages are compressed
-    /// by [`chunk`]; and for `FLOAT` columns, whose statistics are taken there from PLAIN
-    /// pages ([`statistics`]), the same without statistics (unless a dictionary is asked
-    /// for).
+    /// by [`chunk`]; and for `FLOAT` and `DOUBLE` columns, whose statistics are taken there
+    /// from PLAIN pages in the type-defined order ([`statistics`]), the same without
+    /// statistics (unless a dictionary is asked for: its pages are not PLAIN values).
     fn chunk_properties(&self) -> chunk::ChunkProperties {
         let uncompressed = || {
             self.builder(Vec::new())
                 .set_compression(Compression::UNCOMPRESSED)
         };
-        #[cfg(test)]
-        let ours = !statistics::BY_PARQUET_RS.get();
-        #[cfg(not(test))]
-        let ours = true;
         chunk::ChunkProperties {
             parquet: std::sync::Arc::new(uncompressed().build()),
-            float: (ours && !self.dictionary).then(|| {
+            float: (!self.dictionary).then(|| {
                 let props = uncompressed()
                     .set_statistics_enabled(EnabledStatistics::None)
                     .build();
@@ -402,7 +398,7 @@ struct Table<W: Write + Send> {
     schema: arrow_schema::SchemaRef,
     /// The writer, once the first row group is written; until then its output and
     /// properties. (Made by `ArrowWriter`, which stores the Arrow schema in the file.)
-    writer: Option<SerializedFileWriter<W>>,
+    writer: Option<SerializedFileWriter<statistics::Held<W>>>,
     out: Option<(W, WriterProperties)>,
     properties_error: Option<ParquetError>,
     /// The column writers' properties: as the file's, without compression.
@@ -476,12 +472,13 @@ impl<W: Write + Send> Table<W> {
 
     /// The writer, made on first use (through `ArrowWriter`, which stores the Arrow
     /// schema in the file's metadata).
-    fn writer(&mut self) -> Result<&mut SerializedFileWriter<W>, ParquetError> {
+    fn writer(&mut self) -> Result<&mut SerializedFileWriter<statistics::Held<W>>, ParquetError> {
         if self.writer.is_none() {
             if let Some(e) = self.properties_error.take() {
                 return Err(e);
             }
             let (out, props) = self.out.take().expect("an output until the writer is made");
+            let out = statistics::Held::new(out);
             let writer = ArrowWriter::try_new(out, self.schema.clone(), Some(props))?;
             self.writer = Some(writer.into_serialized_writer()?.0);
         }
@@ -528,7 +525,7 @@ impl<W: Write + Send> Table<W> {
     /// The output, once the file is begun (to close a file handle between row groups:
     /// the writer is flushed after each).
     fn output(&mut self) -> Option<&mut W> {
-        self.writer.as_mut().map(SerializedFileWriter::inner_mut)
+        self.writer.as_mut().map(|w| &mut w.inner_mut().inner)
     }
 
     /// Writes what is left and the footer, with the log's identity; a table without rows
@@ -552,7 +549,13 @@ impl<W: Write + Send> Table<W> {
         for kv in identity.key_values() {
             file.append_key_value_metadata(kv);
         }
+        // The footer held back, to give float columns the type-defined order their
+        // statistics are taken in.
+        file.inner_mut().hold();
         let meta = file.finish()?;
+        let columns = file.schema_descr().num_columns();
+        file.inner_mut()
+            .write_held(|footer| statistics::type_defined_float_orders(footer, columns))?;
         Ok((
             true,
             TableWritten {

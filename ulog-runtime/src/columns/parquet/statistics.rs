@@ -1,34 +1,30 @@
-//! The statistics of `FLOAT` column chunks (minimum, maximum and NaN count, of each page
-//! and of the chunk, and the column index made of the pages'), taken here from each page's
-//! PLAIN values as the page is compressed, instead of by parquet-rs's column writer.
+//! The statistics of `FLOAT` and `DOUBLE` column chunks (minimum, maximum and NaN count, of
+//! each page and of the chunk, and the column index made of the pages'), taken here from
+//! each page's PLAIN values as the page is handed over to be compressed, in the format's
+//! type-defined order, instead of by parquet-rs's column writer; and the footer that says
+//! so.
 //!
-//! parquet-rs reduces every batch it is given (`min_max_f32`), and on the x86-64 baseline,
-//! which has no vector minimum of 32-bit integers before SSE4.1, the compiler leaves its
-//! loop scalar: with statistics off, a conversion of the 400 MB benchmark log took 11% less
-//! CPU (an Intel Xeon, 11 interleaved runs). Here a page's values are reduced as the page
-//! is handed over to be compressed, in SSE2 lanes on x86-64 (a portable loop elsewhere).
-//!
-//! The statistics are parquet-rs's, bit for bit, so the files are the same bytes: values
-//! ordered as IEEE 754's total order (`f32::total_cmp`: -0 before +0), NaN left out of a
-//! page's bounds unless the page holds nothing else (its bounds are then the NaNs' own, in
-//! that order), NaN counted; the chunk's bounds merged from its pages' as parquet-rs merges
-//! them; the column index's boundary order found as parquet-rs finds it. A test writes the
-//! same tables both ways and compares the files.
+//! Why not parquet-rs's own: it marks float columns with the format's newer IEEE 754
+//! total-order column order, which pyarrow 26 does not know yet, so that it ignores those
+//! columns' bounds, as the format asks of a reader that does not know an order (DuckDB
+//! reads them). The older type-defined order is read by every reader: NaN is never a bound
+//! (a page of nothing but NaN has none, and then its chunk has no column index), a zero
+//! minimum is written -0.0 and a zero maximum +0.0, and NaN values are counted. parquet-rs
+//! 60 writes the column order from the type alone ([`type_defined_float_orders`] puts the
+//! older one in the footer). And speed: parquet-rs reduces every batch it is given
+//! (`min_max_f32`), and on the x86-64 baseline, which has no vector minimum of 32-bit
+//! integers before SSE4.1, the compiler leaves its loop scalar: with statistics off, a
+//! conversion of the 400 MB benchmark log took 11% less CPU (an Intel Xeon, 11 interleaved
+//! runs). Here a page's `f32`s are reduced in SSE2 lanes on x86-64 (a portable loop
+//! elsewhere).
 
-use std::cmp::Ordering;
+use std::io::Write;
 
 use parquet::basic::{BoundaryOrder, Type};
 use parquet::errors::ParquetError;
 use parquet::file::metadata::ColumnIndexBuilder;
 use parquet::file::page_index::column_index::ColumnIndexMetaData;
 use parquet::file::statistics::{Statistics, ValueStatistics};
-
-#[cfg(test)]
-thread_local! {
-    /// Tests: whether this thread's conversions leave `FLOAT` statistics to parquet-rs, as
-    /// the reference the statistics taken here are compared with.
-    pub(super) static BY_PARQUET_RS: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
-}
 
 /// The key of a float's bits that orders as `f32::total_cmp` does, as a signed integer
 /// (its own inverse).
@@ -48,16 +44,41 @@ fn is_nan(bits: u32) -> bool {
     bits & 0x7fff_ffff > 0x7f80_0000
 }
 
-/// One page's bounds and NaN count.
-#[derive(Debug, Clone, Copy)]
+/// One page's bounds (none when it holds nothing but NaN) and NaN count; an `f32` page's
+/// bounds as `f64`s, which hold them exactly.
+#[derive(Debug, Clone, Copy, PartialEq)]
 struct Page {
-    min: f32,
-    max: f32,
+    bounds: Option<(f64, f64)>,
     nans: u64,
 }
 
-/// The bounds (NaN left out unless every value is one) and NaN count of `values`, PLAIN
-/// `f32`s (at least one; 4 bytes each).
+/// Bounds in the type-defined order: a zero minimum is -0.0, a zero maximum +0.0.
+fn signed_zeros((min, max): (f64, f64)) -> (f64, f64) {
+    (
+        if min == 0.0 { -0.0 } else { min },
+        if max == 0.0 { 0.0 } else { max },
+    )
+}
+
+/// The bounds (NaN left out) and NaN count of `values`, PLAIN `f64`s (8 bytes each).
+fn reduce_f64(values: &[u8]) -> Page {
+    let mut bounds: Option<(f64, f64)> = None;
+    let mut nans = 0;
+    for w in values.as_chunks::<8>().0 {
+        let v = f64::from_le_bytes(*w);
+        if v.is_nan() {
+            nans += 1;
+            continue;
+        }
+        bounds = Some(bounds.map_or((v, v), |(lo, hi)| (lo.min(v), hi.max(v))));
+    }
+    Page {
+        bounds: bounds.map(signed_zeros),
+        nans,
+    }
+}
+
+/// The bounds (NaN left out) and NaN count of `values`, PLAIN `f32`s (4 bytes each).
 fn reduce(values: &[u8]) -> Page {
     // Per lane: the least and greatest key of a value that is not NaN, and the NaNs seen.
     // A NaN is replaced by each bound's identity, with masks rather than branches.
@@ -89,25 +110,13 @@ fn reduce(values: &[u8]) -> Page {
         lanes.nans = [0; LANES];
     }
     let count = (values.len() / 4) as u64;
-    let (min, max) = if nans == count {
-        // Nothing but NaN: the bounds are the NaNs' own, in total order.
-        let keys = values
-            .as_chunks::<4>()
-            .0
-            .iter()
-            .map(|w| key(u32::from_le_bytes(*w)));
-        keys.fold((i32::MAX, i32::MIN), |(lo, hi), k| (lo.min(k), hi.max(k)))
-    } else {
-        (
-            lanes.mins.into_iter().min().expect("lanes"),
-            lanes.maxs.into_iter().max().expect("lanes"),
-        )
-    };
-    Page {
-        min: float(min),
-        max: float(max),
-        nans,
-    }
+    // The least and greatest key in total order, then the type-defined zeros.
+    let bounds = (nans < count).then(|| {
+        let min = lanes.mins.into_iter().min().expect("lanes");
+        let max = lanes.maxs.into_iter().max().expect("lanes");
+        signed_zeros((f64::from(float(min)), f64::from(float(max))))
+    });
+    Page { bounds, nans }
 }
 
 /// Values reduced side by side.
@@ -211,96 +220,237 @@ mod sse2 {
     }
 }
 
-/// `a > b` in total order.
-fn greater(a: f32, b: f32) -> bool {
-    a.total_cmp(&b) == Ordering::Greater
-}
-
-/// `current` and `new` merged as parquet-rs merges bounds: a NaN never replaces a number,
-/// a number always replaces a NaN; otherwise the one `wins` over the other.
-fn merge(current: Option<f32>, new: f32, wins: impl Fn(f32, f32) -> bool) -> f32 {
-    match current {
-        None => new,
-        Some(cur) => match (cur.is_nan(), new.is_nan()) {
-            (false, true) => cur,
-            (true, false) => new,
-            _ if wins(new, cur) => new,
-            _ => cur,
-        },
-    }
-}
-
-/// The statistics of one `FLOAT` column chunk, a data page at a time.
-#[derive(Debug, Default)]
+/// The statistics of one `FLOAT` or `DOUBLE` column chunk, a data page at a time.
+#[derive(Debug)]
 pub(super) struct FloatStatistics {
+    /// `FLOAT` or `DOUBLE`.
+    kind: Type,
     pages: Vec<Page>,
 }
 
 impl FloatStatistics {
+    /// No page yet of a column of physical type `kind` (`FLOAT` or `DOUBLE`).
+    pub(super) fn new(kind: Type) -> FloatStatistics {
+        FloatStatistics {
+            kind,
+            pages: Vec::new(),
+        }
+    }
+
     /// Takes the statistics of a data page: `num_values` PLAIN values, nothing else (a
     /// column of required values has no levels).
     pub(super) fn page(&mut self, buf: &[u8], num_values: u32) -> Result<(), ParquetError> {
-        if num_values == 0 || buf.len() != num_values as usize * 4 {
+        let width = if self.kind == Type::DOUBLE { 8 } else { 4 };
+        if num_values == 0 || buf.len() != num_values as usize * width {
             return Err(ParquetError::General(format!(
-                "a FLOAT data page of {num_values} values in {} bytes: not PLAIN values only, \
+                "a {} data page of {num_values} values in {} bytes: not PLAIN values only, \
                  so its statistics cannot be taken from them",
+                self.kind,
                 buf.len()
             )));
         }
-        self.pages.push(reduce(buf));
+        self.pages.push(if width == 8 {
+            reduce_f64(buf)
+        } else {
+            reduce(buf)
+        });
         Ok(())
     }
 
-    /// The chunk's statistics (`signed`: whether they also fill the deprecated `min`/`max`
-    /// fields, as parquet-rs does for a column of signed order), and the column index if
-    /// `index` (page statistics asked for).
+    /// The chunk's statistics (filling the deprecated `min`/`max` fields too, as parquet-rs
+    /// does for a column of signed order), and its column index if `index` (page
+    /// statistics asked for) and every page has bounds.
     pub(super) fn finish(
         self,
-        signed: bool,
         index: bool,
     ) -> Result<(Statistics, Option<ColumnIndexMetaData>), ParquetError> {
-        let mut min = None;
-        let mut max = None;
-        let mut nans = None;
-        for p in &self.pages {
-            min = Some(merge(min, p.min, |a, b| greater(b, a)));
-            max = Some(merge(max, p.max, greater));
-            *nans.get_or_insert(0) += p.nans;
-        }
-        let statistics = ValueStatistics::new(min, max, None, Some(0), false)
-            .with_nan_count(nans)
-            .with_backwards_compatible_min_max(signed);
-        if !index {
-            return Ok((Statistics::Float(statistics), None));
-        }
-        let mut builder = ColumnIndexBuilder::new(Type::FLOAT);
+        let bounds = self
+            .pages
+            .iter()
+            .filter_map(|p| p.bounds)
+            .reduce(|(lo, hi), (l, h)| (lo.min(l), hi.max(h)))
+            .map(signed_zeros);
+        let nans = (!self.pages.is_empty()).then(|| self.pages.iter().map(|p| p.nans).sum());
+        let statistics = if self.kind == Type::DOUBLE {
+            Statistics::Double(
+                ValueStatistics::new(
+                    bounds.map(|b| b.0),
+                    bounds.map(|b| b.1),
+                    None,
+                    Some(0),
+                    false,
+                )
+                .with_nan_count(nans)
+                .with_backwards_compatible_min_max(true),
+            )
+        } else {
+            // Bounds of `f32`s, held as `f64`s: exact back.
+            let narrow = |v: f64| v as f32;
+            Statistics::Float(
+                ValueStatistics::new(
+                    bounds.map(|b| narrow(b.0)),
+                    bounds.map(|b| narrow(b.1)),
+                    None,
+                    Some(0),
+                    false,
+                )
+                .with_nan_count(nans)
+                .with_backwards_compatible_min_max(true),
+            )
+        };
+        let pages: Option<Vec<(f64, f64, u64)>> = self
+            .pages
+            .iter()
+            .map(|p| p.bounds.map(|(lo, hi)| (lo, hi, p.nans)))
+            .collect();
+        let Some(pages) = pages.filter(|_| index) else {
+            return Ok((statistics, None));
+        };
+        let mut builder = ColumnIndexBuilder::new(self.kind);
         let (mut ascending, mut descending) = (true, true);
-        for (i, p) in self.pages.iter().enumerate() {
-            if let Some(last) = i.checked_sub(1).map(|j| self.pages[j]) {
-                if greater(last.min, p.min) || greater(last.max, p.max) {
-                    ascending = false;
-                }
-                if greater(p.min, last.min) || greater(p.max, last.max) {
-                    descending = false;
-                }
+        for (i, &(lo, hi, nans)) in pages.iter().enumerate() {
+            if let Some(&(last_lo, last_hi, _)) = i.checked_sub(1).map(|j| &pages[j]) {
+                ascending &= !(last_lo > lo || last_hi > hi);
+                descending &= !(lo > last_lo || hi > last_hi);
             }
-            let nans = i64::try_from(p.nans).map_err(|_| {
+            let bytes = |v: f64| {
+                if self.kind == Type::DOUBLE {
+                    v.to_le_bytes().to_vec()
+                } else {
+                    (v as f32).to_le_bytes().to_vec()
+                }
+            };
+            let nans = i64::try_from(nans).map_err(|_| {
                 ParquetError::General("a page of more than i64::MAX NaNs".to_owned())
             })?;
-            builder.append(
-                false,
-                p.min.to_le_bytes().to_vec(),
-                p.max.to_le_bytes().to_vec(),
-                0,
-                Some(nans),
-            );
+            builder.append(false, bytes(lo), bytes(hi), 0, Some(nans));
         }
         builder.set_boundary_order(match (ascending, descending) {
             (true, _) => BoundaryOrder::ASCENDING,
             (false, true) => BoundaryOrder::DESCENDING,
             (false, false) => BoundaryOrder::UNORDERED,
         });
-        Ok((Statistics::Float(statistics), Some(builder.build()?)))
+        Ok((statistics, Some(builder.build()?)))
+    }
+}
+
+/// Puts the type-defined column order in a Parquet file's footer (`footer`: the file's last
+/// bytes, the thrift `FileMetaData`, its length and `PAR1`) where parquet-rs 60 writes the
+/// IEEE 754 total order: for `FLOAT` and `DOUBLE` columns, whose statistics
+/// [`FloatStatistics`] takes in the type-defined order. `columns`: the file's leaf columns.
+///
+/// parquet-rs writes the column orders last in `FileMetaData` (field 7, a list of one
+/// empty-struct union a column: `1C 00 00` for the type-defined order, `2C 00 00` for the
+/// IEEE 754 one, in thrift's compact protocol), so the two are swapped in place, the
+/// footer's length unchanged. Anything else there is an error: a later parquet-rs may lay
+/// its footer out otherwise.
+pub(super) fn type_defined_float_orders(
+    footer: &mut [u8],
+    columns: usize,
+) -> Result<(), ParquetError> {
+    let unexpected = |what: &str| {
+        ParquetError::General(format!(
+            "the footer's column orders are not where parquet-rs 60 writes them ({what})"
+        ))
+    };
+    let n = footer.len();
+    if n < 8 || footer[n - 4..] != *b"PAR1" {
+        return Err(unexpected("no PAR1 at the end"));
+    }
+    let len = u32::from_le_bytes(footer[n - 8..n - 4].try_into().expect("4 bytes")) as usize;
+    let meta_end = n - 8;
+    let meta_start = meta_end
+        .checked_sub(len)
+        .ok_or_else(|| unexpected("a footer longer than the bytes"))?;
+    let meta = &mut footer[meta_start..meta_end];
+    // `... 19 <list header> <columns x 3 bytes> 00`: field 7 (after 6), a list of structs.
+    let mut header = Vec::new();
+    if columns < 15 {
+        header.push(((columns as u8) << 4) | 0x0c);
+    } else {
+        header.push(0xfc);
+        let mut v = columns;
+        loop {
+            let byte = (v & 0x7f) as u8;
+            v >>= 7;
+            if v == 0 {
+                header.push(byte);
+                break;
+            }
+            header.push(byte | 0x80);
+        }
+    }
+    let list = columns * 3;
+    let at = meta
+        .len()
+        .checked_sub(1 + list + header.len() + 1)
+        .ok_or_else(|| unexpected("a footer too short"))?;
+    if meta[at] != 0x19
+        || meta[at + 1..at + 1 + header.len()] != header[..]
+        || meta[meta.len() - 1] != 0
+    {
+        return Err(unexpected("no list of one order a column at its end"));
+    }
+    let end = meta.len() - 1;
+    let orders = &mut meta[at + 1 + header.len()..end];
+    if !orders
+        .chunks_exact(3)
+        .all(|o| matches!(o, [0x1c | 0x2c, 0, 0]))
+    {
+        return Err(unexpected("an order that is neither"));
+    }
+    for order in orders.chunks_exact_mut(3) {
+        order[0] = 0x1c;
+    }
+    Ok(())
+}
+
+/// An output whose writes can be held back (a file's footer), to be patched before they
+/// are written.
+pub(super) struct Held<W: Write> {
+    pub(super) inner: W,
+    held: Option<Vec<u8>>,
+}
+
+impl<W: Write> Held<W> {
+    pub(super) fn new(inner: W) -> Held<W> {
+        Held { inner, held: None }
+    }
+
+    /// Holds back what is written from now on.
+    pub(super) fn hold(&mut self) {
+        self.held.get_or_insert_with(Vec::new);
+    }
+
+    /// Writes what was held back, once `patch` has seen it, and writes through again.
+    pub(super) fn write_held(
+        &mut self,
+        patch: impl FnOnce(&mut [u8]) -> Result<(), ParquetError>,
+    ) -> Result<(), ParquetError> {
+        let mut held = self.held.take().unwrap_or_default();
+        patch(&mut held)?;
+        self.inner.write_all(&held)?;
+        self.inner.flush()?;
+        Ok(())
+    }
+}
+
+impl<W: Write> Write for Held<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        match &mut self.held {
+            Some(held) => {
+                held.extend_from_slice(buf);
+                Ok(buf.len())
+            }
+            None => self.inner.write(buf),
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        match self.held {
+            Some(_) => Ok(()),
+            None => self.inner.flush(),
+        }
     }
 }
 
@@ -308,24 +458,47 @@ impl FloatStatistics {
 mod tests {
     use super::*;
 
-    fn page(values: &[f32]) -> Page {
-        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
-        reduce(&bytes)
+    /// A page's bounds (as bits of `f64`s) and NaN count, its values `f32`s and `f64`s.
+    fn pages(values: &[f32]) -> [(Option<(u64, u64)>, u64); 2] {
+        let narrow: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let wide: Vec<u8> = values
+            .iter()
+            .flat_map(|&v| f64::from(v).to_le_bytes())
+            .collect();
+        [reduce(&narrow), reduce_f64(&wide)].map(|p| {
+            (
+                p.bounds.map(|(lo, hi)| (lo.to_bits(), hi.to_bits())),
+                p.nans,
+            )
+        })
     }
 
-    /// The bounds by the definition: total order over the values that are not NaN, or over
-    /// all when every one is.
-    fn expected(values: &[f32]) -> (u32, u32, u64) {
-        let numbers: Vec<f32> = values.iter().copied().filter(|v| !v.is_nan()).collect();
-        let pool = if numbers.is_empty() { values } else { &numbers };
-        let min = pool.iter().copied().min_by(f32::total_cmp).unwrap();
-        let max = pool.iter().copied().max_by(f32::total_cmp).unwrap();
+    /// The bounds by the type-defined order's rules, written here from the format's text:
+    /// over the values that are not NaN (none if there are none), a zero minimum -0.0 and a
+    /// zero maximum +0.0.
+    fn expected(values: &[f32]) -> (Option<(u64, u64)>, u64) {
+        let numbers: Vec<f64> = values
+            .iter()
+            .filter(|v| !v.is_nan())
+            .map(|&v| f64::from(v))
+            .collect();
         let nans = (values.len() - numbers.len()) as u64;
-        (min.to_bits(), max.to_bits(), nans)
+        if numbers.is_empty() {
+            return (None, nans);
+        }
+        let mut lo = numbers.iter().copied().fold(f64::INFINITY, f64::min);
+        let mut hi = numbers.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        if lo == 0.0 {
+            lo = -0.0;
+        }
+        if hi == 0.0 {
+            hi = 0.0;
+        }
+        (Some((lo.to_bits(), hi.to_bits())), nans)
     }
 
     #[test]
-    fn a_pages_bounds_follow_total_order_and_leave_nan_out() {
+    fn a_pages_bounds_leave_nan_out_and_sign_their_zeros() {
         let neg_nan = f32::from_bits(0xffc0_0001);
         let cases: Vec<Vec<f32>> = vec![
             vec![1.0],
@@ -349,12 +522,47 @@ mod tests {
             ],
         ];
         for values in cases {
-            let p = page(&values);
-            assert_eq!(
-                (p.min.to_bits(), p.max.to_bits(), p.nans),
-                expected(&values),
-                "{values:?}"
-            );
+            let want = expected(&values);
+            let [narrow, wide] = pages(&values);
+            assert_eq!(narrow, want, "f32 {values:?}");
+            assert_eq!(wide, want, "f64 {values:?}");
+        }
+    }
+
+    /// The footer's orders: the IEEE 754 ones made type-defined, in place; a footer laid out
+    /// otherwise refused, untouched.
+    #[test]
+    fn the_footers_float_orders_become_type_defined() {
+        // `FileMetaData`'s end as parquet-rs writes it for 3 and for 20 columns (field 6,
+        // the `created_by` text "x", then field 7), its length and `PAR1`.
+        for columns in [3usize, 20] {
+            let mut meta = vec![0x18, 0x01, b'x', 0x19];
+            if columns < 15 {
+                meta.push(((columns as u8) << 4) | 0x0c);
+            } else {
+                meta.extend([0xfc, columns as u8]);
+            }
+            for k in 0..columns {
+                meta.extend(if k % 2 == 1 {
+                    [0x2c, 0, 0]
+                } else {
+                    [0x1c, 0, 0]
+                });
+            }
+            meta.push(0);
+            let mut footer = meta.clone();
+            footer.extend((meta.len() as u32).to_le_bytes());
+            footer.extend(b"PAR1");
+            type_defined_float_orders(&mut footer, columns).unwrap();
+            let orders = &footer[meta.len() - 1 - 3 * columns..meta.len() - 1];
+            assert!(orders.chunks(3).all(|o| o == [0x1c, 0, 0]), "{orders:?}");
+            // One column more than the footer holds: refused, nothing changed.
+            let mut other = meta.clone();
+            other.extend((meta.len() as u32).to_le_bytes());
+            other.extend(b"PAR1");
+            let before = other.clone();
+            assert!(type_defined_float_orders(&mut other, columns + 1).is_err());
+            assert_eq!(other, before);
         }
     }
 }

@@ -1107,9 +1107,10 @@ fn the_same_log_gives_the_same_files_on_any_number_of_threads() {
     std::fs::remove_dir_all(&root).unwrap();
 }
 
-/// A log of awkward floats, `rows` rows: each column more than a 1 MiB page at 300,000
-/// rows (one row group), their pages' bounds rising, falling, both infinities, NaN of
-/// either sign and payload (a page of nothing else), and zeros of one sign or both.
+/// A log of awkward floats, `rows` rows: each `float` column more than a 1 MiB page at
+/// 300,000 rows (one row group), their pages' bounds rising, falling, both infinities, NaN
+/// of either sign and payload (pages of nothing else), and zeros of one sign or both; and a
+/// `double` column of the same mix.
 fn awkward_floats_log(rows: u32) -> Vec<u8> {
     #[derive(ULog)]
     struct Awkward {
@@ -1119,7 +1120,8 @@ fn awkward_floats_log(rows: u32) -> Vec<u8> {
         mixed: f32,
         nan_then_numbers: f32,
         zeros: f32,
-        negative_zero: f32,
+        positive_zero: f32,
+        wide: f64,
     }
     let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
     let topic = w.topic::<Awkward>(0).unwrap();
@@ -1142,70 +1144,166 @@ fn awkward_floats_log(rows: u32) -> Vec<u8> {
             mixed,
             nan_then_numbers: if i < rows * 2 / 3 { nan } else { f },
             zeros: if i % 2 == 0 { 0.0 } else { -0.0 },
-            negative_zero: -0.0,
+            positive_zero: 0.0,
+            wide: if i % 5 == 0 {
+                f64::NAN
+            } else {
+                f64::from(mixed) * 1e300
+            },
         };
         w.write(&topic, &row).unwrap();
     }
     w.into_inner()
 }
 
-/// Every file of a conversion of `bytes` (inline), by name; `FLOAT` statistics by
-/// parquet-rs if `by_parquet_rs`, else from the pages.
-fn converted(bytes: &[u8], page_statistics: bool, by_parquet_rs: bool) -> Vec<(String, Vec<u8>)> {
-    let root = temp(&format!("float-stats-{page_statistics}-{by_parquet_rs}"));
-    super::statistics::BY_PARQUET_RS.set(by_parquet_rs);
-    let options = ParquetOptions {
-        encoders: Some(0),
-        page_statistics,
-        ..ParquetOptions::default()
-    };
-    let conv = Converter::new(&root, options).convert_reader(bytes, "f.ulg");
-    super::statistics::BY_PARQUET_RS.set(false);
-    let files = conv
-        .unwrap()
-        .files
-        .iter()
-        .map(|f| {
-            let name = f.path.file_name().unwrap().to_string_lossy().into_owned();
-            (name, std::fs::read(&f.path).unwrap())
-        })
-        .collect();
-    std::fs::remove_dir_all(&root).unwrap();
-    files
+/// A float column's bounds as the type-defined order has them: NaN left out (none if
+/// nothing else), a zero minimum -0.0 and a zero maximum +0.0; as bits, and the NaN count.
+fn type_defined_bounds(values: &[f64]) -> (Option<(u64, u64)>, u64) {
+    let numbers: Vec<f64> = values.iter().copied().filter(|v| !v.is_nan()).collect();
+    let nans = (values.len() - numbers.len()) as u64;
+    let bounds = numbers.iter().copied().reduce(f64::min).map(|lo| {
+        let hi = numbers.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let lo = if lo == 0.0 { -0.0 } else { lo };
+        let hi = if hi == 0.0 { 0.0 } else { hi };
+        (lo.to_bits(), hi.to_bits())
+    });
+    (bounds, nans)
 }
 
-/// `FLOAT` statistics taken from the pages ([`super::statistics`]) are parquet-rs's own:
-/// every corpus log, and a log of awkward floats with page statistics and without, gives
-/// the same files byte for byte either way.
+/// `FLOAT` and `DOUBLE` columns' statistics are in the type-defined order, which every
+/// reader knows (pyarrow ignores parquet-rs 60's IEEE 754 total order), the footer says
+/// so, and they are those of the values: of each chunk, and of each page in the column
+/// index (none for a chunk with a page of nothing but NaN), with and without page
+/// statistics.
 #[test]
-fn float_statistics_from_the_pages_are_parquet_rs_own_byte_for_byte() {
-    let mut logs: Vec<(String, Vec<u8>, bool)> = crate::corpus::corpus_files()
-        .into_iter()
-        .map(|p| {
-            (
-                crate::corpus::short_name(&p),
-                std::fs::read(&p).unwrap(),
-                true,
-            )
-        })
-        .collect();
-    let awkward = awkward_floats_log(300_000);
-    logs.push(("awkward floats".to_owned(), awkward.clone(), true));
-    logs.push((
-        "awkward floats, chunk statistics".to_owned(),
-        awkward,
-        false,
-    ));
-    for (log, bytes, page_statistics) in &logs {
-        let ours = converted(bytes, *page_statistics, false);
-        let reference = converted(bytes, *page_statistics, true);
-        assert_eq!(ours.len(), reference.len(), "{log}");
-        for ((name, got), (_, want)) in ours.iter().zip(&reference) {
+fn float_statistics_are_in_the_type_defined_order_and_those_of_the_values() {
+    use parquet::arrow::arrow_reader::ArrowReaderOptions;
+    use parquet::basic::{ColumnOrder, SortOrder, Type as Physical};
+    use parquet::file::page_index::column_index::ColumnIndexMetaData;
+    use parquet::file::statistics::Statistics;
+
+    let bytes = awkward_floats_log(300_000);
+    for page_statistics in [true, false] {
+        let root = temp(&format!("float-stats-{page_statistics}"));
+        let options = ParquetOptions {
+            page_statistics,
+            ..ParquetOptions::default()
+        };
+        let conv = Converter::new(&root, options)
+            .convert_reader(&bytes[..], "f.ulg")
+            .unwrap();
+        let path = &conv.files[0].path;
+        let file = std::fs::File::open(path).unwrap();
+        let builder = ParquetRecordBatchReaderBuilder::try_new_with_options(
+            file,
+            ArrowReaderOptions::new()
+                .with_page_index_policy(parquet::file::metadata::PageIndexPolicy::Optional),
+        )
+        .unwrap();
+        let meta = builder.metadata().clone();
+        let batches: Vec<RecordBatch> = builder.build().unwrap().map(Result::unwrap).collect();
+        let schema = meta.file_metadata().schema_descr();
+        let orders = meta.file_metadata().column_orders().unwrap();
+        let mut checked = 0;
+        for (c, order) in orders.iter().enumerate() {
+            let physical = schema.column(c).physical_type();
+            if !matches!(physical, Physical::FLOAT | Physical::DOUBLE) {
+                continue;
+            }
+            assert_eq!(*order, ColumnOrder::TYPE_DEFINED_ORDER(SortOrder::SIGNED));
+            let name = schema.column(c).name().to_owned();
+            let values: Vec<f64> = batches
+                .iter()
+                .flat_map(|b| {
+                    let col = b.column_by_name(&name).unwrap();
+                    arrow_array::cast::AsArray::as_primitive_opt::<arrow_array::types::Float32Type>(
+                        col,
+                    )
+                    .map(|a| a.values().iter().map(|&v| f64::from(v)).collect::<Vec<_>>())
+                    .unwrap_or_else(|| {
+                        arrow_array::cast::AsArray::as_primitive::<arrow_array::types::Float64Type>(
+                            col,
+                        )
+                        .values()
+                        .to_vec()
+                    })
+                })
+                .collect();
+            assert_eq!(meta.num_row_groups(), 1, "one row group");
+            let chunk = meta.row_group(0).column(c);
+            let (want, nans) = type_defined_bounds(&values);
+            let got = match chunk.statistics().unwrap() {
+                Statistics::Float(s) => (
+                    s.min_opt()
+                        .zip(s.max_opt())
+                        .map(|(a, b)| (f64::from(*a).to_bits(), f64::from(*b).to_bits())),
+                    s.nan_count_opt(),
+                ),
+                Statistics::Double(s) => (
+                    s.min_opt()
+                        .zip(s.max_opt())
+                        .map(|(a, b)| (a.to_bits(), b.to_bits())),
+                    s.nan_count_opt(),
+                ),
+                other => panic!("{name}: {other:?}"),
+            };
+            assert_eq!(got, (want, Some(nans)), "{name}: the chunk's statistics");
+            // The column index: each page's bounds, over the rows the offset index gives it.
+            let page_index = meta.page_index_for_row_group(0);
+            let index = page_index.column_index(c);
+            let pages = page_index.offset_index(c).unwrap().page_locations();
+            let starts: Vec<usize> = pages.iter().map(|p| p.first_row_index as usize).collect();
+            let ranges: Vec<std::ops::Range<usize>> = starts
+                .iter()
+                .zip(starts.iter().skip(1).chain([&values.len()]))
+                .map(|(&a, &b)| a..b)
+                .collect();
             assert!(
-                got == want,
-                "{log}: {name} differs from parquet-rs's statistics"
+                ranges.len() > 1 || name == "wide",
+                "{name}: {} pages",
+                ranges.len()
             );
+            let expected: Vec<_> = ranges
+                .iter()
+                .map(|r| type_defined_bounds(&values[r.clone()]))
+                .collect();
+            let nan_page = expected.iter().any(|(b, _)| b.is_none());
+            match index {
+                Some(ColumnIndexMetaData::FLOAT(ix)) => {
+                    assert!(page_statistics && !nan_page, "{name}: an index");
+                    for (k, (b, n)) in expected.iter().enumerate() {
+                        let (lo, hi) = b.unwrap();
+                        assert_eq!(
+                            f64::from(*ix.min_value(k).unwrap()).to_bits(),
+                            lo,
+                            "{name} page {k}"
+                        );
+                        assert_eq!(
+                            f64::from(*ix.max_value(k).unwrap()).to_bits(),
+                            hi,
+                            "{name} page {k}"
+                        );
+                        assert_eq!(ix.nan_count(k), Some(*n as i64), "{name} page {k}");
+                    }
+                }
+                Some(ColumnIndexMetaData::DOUBLE(ix)) => {
+                    assert!(page_statistics && !nan_page, "{name}: an index");
+                    for (k, (b, n)) in expected.iter().enumerate() {
+                        let (lo, hi) = b.unwrap();
+                        assert_eq!(ix.min_value(k).unwrap().to_bits(), lo, "{name} page {k}");
+                        assert_eq!(ix.max_value(k).unwrap().to_bits(), hi, "{name} page {k}");
+                        assert_eq!(ix.nan_count(k), Some(*n as i64), "{name} page {k}");
+                    }
+                }
+                None => {
+                    assert!(!page_statistics || nan_page, "{name}: no index")
+                }
+                Some(other) => panic!("{name}: {other:?}"),
+            }
+            checked += 1;
         }
+        assert_eq!(checked, 7, "every float column");
+        std::fs::remove_dir_all(&root).unwrap();
     }
 }
 
