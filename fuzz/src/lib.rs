@@ -714,6 +714,22 @@ pub fn rewrite(data: &[u8]) {
     }
 }
 
+/// The `rows` values of a column chunk of required values.
+fn read_all<T: parquet::data_type::DataType>(
+    reader: &mut parquet::column::reader::ColumnReaderImpl<T>,
+    rows: usize,
+    name: &str,
+) -> Vec<T::T> {
+    let mut values = Vec::new();
+    while values.len() < rows {
+        let (records, ..) = reader
+            .read_records(rows - values.len(), None, None, &mut values)
+            .expect("the values read");
+        assert!(records > 0, "{name}: a column chunk ends early");
+    }
+    values
+}
+
 /// The Parquet writer over the whole-file reader: every topic instance that can be read is
 /// written (to memory, in row groups of a few batches), reads back with as many rows and row
 /// groups as the writer says, and each `FLOAT` and `DOUBLE` column chunk's statistics are
@@ -769,24 +785,13 @@ pub fn parquet(data: &[u8]) {
                 let rows = chunk.num_values() as usize;
                 let values: Vec<f64> = match group.get_column_reader(c) {
                     Ok(ColumnReader::FloatColumnReader(mut reader)) => {
-                        let mut values = Vec::new();
-                        while values.len() < rows {
-                            let (records, ..) = reader
-                                .read_records(rows - values.len(), None, None, &mut values)
-                                .expect("the values read");
-                            assert!(records > 0, "{name}: a FLOAT column chunk ends early");
-                        }
-                        values.into_iter().map(f64::from).collect()
+                        read_all(&mut reader, rows, name)
+                            .into_iter()
+                            .map(f64::from)
+                            .collect()
                     }
                     Ok(ColumnReader::DoubleColumnReader(mut reader)) => {
-                        let mut values = Vec::new();
-                        while values.len() < rows {
-                            let (records, ..) = reader
-                                .read_records(rows - values.len(), None, None, &mut values)
-                                .expect("the values read");
-                            assert!(records > 0, "{name}: a DOUBLE column chunk ends early");
-                        }
-                        values
+                        read_all(&mut reader, rows, name)
                     }
                     _ => continue,
                 };
