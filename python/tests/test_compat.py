@@ -152,3 +152,114 @@ def test_strict_strings_raise_unicode_errors():
     flags[9] = 1
     with pytest.raises(ulog.ULogIncompatibleFlagException):
         ulog.ULog(io.BytesIO(build(("B", bytes(flags)))))
+
+
+def damaged_copies(data: bytes, seed: str, count: int):
+    """Damaged copies of a log: bytes overwritten, the log cut short, a run of bytes cut
+    out, in turn; the same copies on every run (seeded by the log's name)."""
+    import random
+
+    rng = random.Random(seed)
+    for k in range(count):
+        d = bytearray(data)
+        if k % 3 == 0:
+            for _ in range(rng.randrange(1, 30)):
+                d[rng.randrange(len(d))] = rng.randrange(256)
+        elif k % 3 == 1:
+            d = d[: rng.randrange(len(d))]
+        else:
+            a = rng.randrange(len(d))
+            del d[a: a + rng.randrange(1, 5000)]
+        yield bytes(d)
+
+
+class PyulogTooLong(Exception):
+    pass
+
+
+def test_damaged_logs_read_as_pyulog_reads_them(corpus_log, capsys):
+    """What pyulog's recovery makes of a damaged log, `ulog.ULog` makes too (every
+    attribute, the warnings printed), or the same exception type; where pyulog's recovery
+    does not finish within 10 s (it can loop), ours must still give a log."""
+    import signal
+
+    def too_long(*_):
+        raise PyulogTooLong
+
+    previous = signal.signal(signal.SIGALRM, too_long)
+    try:
+        data = corpus_log.read_bytes()[: 512 << 10]
+        for d in damaged_copies(data, corpus_log.name, 6):
+            signal.alarm(10)
+            try:
+                theirs = pyulog.ULog(io.BytesIO(d))
+            except PyulogTooLong:
+                capsys.readouterr()
+                ulog.ULog(io.BytesIO(d))
+                continue
+            except Exception as e:  # pyulog refuses the copy: so must we, alike
+                signal.alarm(0)
+                capsys.readouterr()
+                with pytest.raises(type(e)):
+                    ulog.ULog(io.BytesIO(d))
+                continue
+            finally:
+                signal.alarm(0)
+            printed_theirs = capsys.readouterr().out
+            ours = ulog.ULog(io.BytesIO(d))
+            assert capsys.readouterr().out == printed_theirs, "the same warnings"
+            check_pair(theirs, ours)
+    finally:
+        signal.signal(signal.SIGALRM, previous)
+
+
+def log_bytes(*messages) -> bytearray:
+    """A log's bytes: the header, then each (type, body) as a message."""
+    f = bytearray(ulog.ULog.HEADER_BYTES + b"\x01" + (0).to_bytes(8, "little"))
+    for ty, body in messages:
+        f += len(body).to_bytes(2, "little") + ty + body
+    return f
+
+
+def carried_subscription_log(last_type: bytes, back: int) -> bytes:
+    """Definitions that end, at the end of the file, with the header of a message longer
+    than what is left: pyulog seeks back by the size it asked for (and `back` more bytes),
+    into the body of an earlier message of an unknown type, which holds a subscription;
+    the data section starts there, and the rows after it are read."""
+    fmt = b"t:uint64_t timestamp;uint8_t x;"
+    body = b"\x00" + (0).to_bytes(2, "little") + b"t"
+    subscription = len(body).to_bytes(2, "little") + b"A" + body
+    rows = [(b"D", (0).to_bytes(2, "little") + (1000 * i).to_bytes(8, "little") + bytes([i]))
+            for i in range(1, 6)]
+    f = log_bytes((b"F", fmt), (b"Z", subscription), *rows)
+    at = len(f) - len(subscription) - sum(3 + len(r[1]) for r in rows)
+    end = len(f) + 3
+    f += (end - back - at).to_bytes(2, "little") + last_type
+    return bytes(f)
+
+
+def test_a_short_read_ending_the_definitions_seeks_back_as_pyulog_does(capsys):
+    # The last header a subscription (pyulog seeks back 3 more: to the message, it thinks)
+    # or a corrupt one (2 more: the next byte, it thinks).
+    for last_type, back in [(b"A", 3), (b"\x00", 2)]:
+        data = carried_subscription_log(last_type, back)
+        theirs = pyulog.ULog(io.BytesIO(data))
+        printed = capsys.readouterr().out
+        ours = ulog.ULog(io.BytesIO(data))
+        assert capsys.readouterr().out == printed
+        check_pair(theirs, ours)
+        assert [d.data["x"].tolist() for d in ours.data_list] == [[1, 2, 3, 4, 5]], last_type
+
+
+def test_a_short_read_pyulog_would_repeat_forever_ends(capsys):
+    # A corrupt header at the end that seeks back to the first row: pyulog reads the same
+    # rows and the same header again, forever; we go on from the next byte, once.
+    fmt = b"t:uint64_t timestamp;uint8_t x;"
+    rows = [(b"D", (0).to_bytes(2, "little") + (1000 * i).to_bytes(8, "little") + bytes([i]))
+            for i in range(1, 4)]
+    f = log_bytes((b"F", fmt), *rows)
+    first_row = len(f) - sum(3 + len(r[1]) for r in rows)
+    f += (len(f) + 3 - 2 - first_row).to_bytes(2, "little") + b"\x00"
+    u = ulog.ULog(io.BytesIO(bytes(f)))
+    assert u.file_corruption and u.data_list == []
+    capsys.readouterr()

@@ -289,6 +289,7 @@ fn read_releasing(
         by_msg_id: vec![0; 1 << 16],
         filtered: HashSet::new(),
         missing: HashSet::new(),
+        seeks_back: Vec::new(),
     };
     r.header()?;
     r.f.last_timestamp = r.f.start_timestamp;
@@ -347,6 +348,8 @@ struct Reader<'a> {
     by_msg_id: Vec<u32>,
     filtered: HashSet<u16>,
     missing: HashSet<u16>,
+    /// Where the definitions section went back to after a short read ([`Reader::after_corrupt_definition`]).
+    seeks_back: Vec<usize>,
 }
 
 impl<'a> Reader<'a> {
@@ -443,7 +446,13 @@ impl<'a> Reader<'a> {
             }
             b'Q' => self.default_parameter(body)?,
             b'A' | b'L' | b'C' => {
-                self.pos = start;
+                // pyulog seeks back by the size it asked for and 3: to this message, but
+                // after a short read at the end of the file to before it, where the data
+                // section then starts (this message if that is before the log's start).
+                self.pos = self
+                    .pos
+                    .checked_sub(size + 3)
+                    .map_or(start, |to| to.min(start));
                 return Ok(true);
             }
             b'B' => {
@@ -479,14 +488,33 @@ impl<'a> Reader<'a> {
             _ => {
                 if ty == 0 || size == 0 || size > 10000 {
                     self.f.file_corrupt = true;
-                    // On from the next byte. (pyulog seeks back by the size it asked for:
-                    // after a short read at the end that is before this message, and it
-                    // reads the same messages again, forever.)
-                    self.pos = start + 1;
+                    self.pos = self.after_corrupt_definition(start, size);
                 }
             }
         }
         Ok(false)
+    }
+
+    /// Where pyulog reads on after a corrupt header in the definitions section: it seeks
+    /// back by the size it asked for and 2, which is the next byte after a whole message,
+    /// but before this message after a short read at the end of the file (it reads messages
+    /// again from there, as the bytes fall). Where that would read the same bytes again
+    /// forever (pyulog never returns), would seek before the log's first byte (pyulog
+    /// raises `OSError` for a path and loops for a file object), or after many such seeks
+    /// (bounding the work), on from the next byte instead.
+    fn after_corrupt_definition(&mut self, start: usize, size: usize) -> usize {
+        const MOST_SEEKS_BACK: usize = 64;
+        let back = (self.pos + 1).checked_sub(size + 3);
+        match back {
+            Some(to) if to > start => start + 1,
+            Some(to)
+                if self.seeks_back.len() < MOST_SEEKS_BACK && !self.seeks_back.contains(&to) =>
+            {
+                self.seeks_back.push(to);
+                to
+            }
+            _ => start + 1,
+        }
     }
 
     /// `_MessageInfo`: (type, key, value).
