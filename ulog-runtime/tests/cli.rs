@@ -1025,6 +1025,24 @@ fn csv_and_json_say_what_they_skip() {
         )),
         "{err}"
     );
+    // The verbs that mirror a pyulog tool print their output and say the damage on stderr
+    // (pyulog prints its `File corruption detected` among the output).
+    for verb in [
+        &["params"][..],
+        &["messages"],
+        &["info", "-m", "no_such_multi_info"],
+    ] {
+        let out = ulog(&[verb, &[cut.to_str().unwrap()][..]].concat());
+        assert!(out.status.success(), "{verb:?}");
+        assert_eq!(
+            String::from_utf8(out.stderr).unwrap(),
+            format!(
+                "ulog: {}: 10 damaged bytes skipped (`ulog info -v` lists where)\n",
+                cut.display()
+            ),
+            "{verb:?}"
+        );
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

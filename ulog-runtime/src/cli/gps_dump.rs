@@ -36,6 +36,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     }
     let log = crate::cli::open(&args.file)?;
     crate::cli::check_utf8(&log, &args.file, args.ignore)?;
+    crate::cli::report_damage(&log, &args.file);
     crate::cli::pyulog_warnings(&log, out)?;
     let dump = match gps_dump(&log, args.instance) {
         Ok(d) => d,

@@ -37,6 +37,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     let log = crate::cli::open(&args.file)?;
     crate::cli::check_utf8(&log, &args.file, args.ignore)?;
     if let Some(name) = &args.message {
+        crate::cli::report_damage(&log, &args.file);
         crate::cli::pyulog_warnings(&log, out)?;
         match crate::tools::multi_info_text(log.metadata(), name, args.newline) {
             Some(text) => out.write_all(text.as_bytes())?,

@@ -285,6 +285,14 @@ pub(crate) fn pyulog_warnings(log: &Log<'_>, out: &mut impl Write) -> Result<(),
     Ok(())
 }
 
+/// Says on stderr the damage the reader skipped, for the verbs that mirror a pyulog tool:
+/// their output is what this reader recovers, and a damaged log is never silent.
+pub(crate) fn report_damage(log: &Log<'_>, file: &Path) {
+    for line in log.skipped().damage_lines() {
+        eprintln!("ulog: {}: {line}", file.display());
+    }
+}
+
 /// As pyulog's tools without `-i`: text that is not UTF-8 anywhere in the log is an error.
 pub(crate) fn check_utf8(log: &Log<'_>, path: &Path, ignore: bool) -> Result<(), Failure> {
     match log.not_utf8().first() {

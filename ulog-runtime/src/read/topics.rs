@@ -124,6 +124,15 @@ impl Skipped {
                 plural(self.orphan_rows)
             ));
         }
+        out.extend(self.damage_lines());
+        out
+    }
+
+    /// The damage alone, a line each: damaged bytes skipped, appended data not read (what
+    /// the verbs that mirror a pyulog tool say on stderr where pyulog prints its
+    /// `File corruption detected` among its output).
+    pub fn damage_lines(&self) -> Vec<String> {
+        let mut out = Vec::new();
         if self.damaged_bytes > 0 {
             out.push(format!(
                 "{} damaged bytes skipped (`ulog info -v` lists where)",
