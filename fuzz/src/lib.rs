@@ -820,3 +820,69 @@ pub fn parquet(data: &[u8]) {
         }
     }
 }
+
+/// pyulog's reading (`compat::pyulog`, what `ulog.ULog` shows): every option on the same
+/// bytes ends, without a panic, and agrees with the others. Each dataset holds whole rows;
+/// a header-only read holds no rows and the same definitions' formats; a read with strict
+/// strings, when it succeeds, equals the lenient one (no string was invalid); a filtered
+/// read holds exactly the full read's datasets of the topics kept; the datasets of the rows
+/// this reader recovers hold whole rows too.
+pub fn pyulog_compat(data: &[u8]) {
+    use ulog_runtime::compat::pyulog::{self, NameFilter, PyulogOptions};
+    let whole_rows = |file: &pyulog::PyulogFile| {
+        for d in &file.data {
+            assert!(
+                d.rows.len() % d.row_size.max(1) == 0,
+                "{} #{}: {} bytes of rows of {} bytes",
+                d.name,
+                d.multi_id,
+                d.rows.len(),
+                d.row_size
+            );
+        }
+    };
+    let Ok(full) = pyulog::read(data, &PyulogOptions::default()) else {
+        return;
+    };
+    whole_rows(&full);
+    let header_only = PyulogOptions {
+        header_only: true,
+        ..Default::default()
+    };
+    if let Ok(header) = pyulog::read(data, &header_only) {
+        assert!(header.data.is_empty(), "a header-only read holds no rows");
+        assert_eq!(
+            header.formats, full.formats,
+            "the formats of a header-only read"
+        );
+    }
+    let strict = PyulogOptions {
+        strict_strings: true,
+        ..Default::default()
+    };
+    if let Ok(strict) = pyulog::read(data, &strict) {
+        // Compared as printed: a NaN parameter equals itself there.
+        assert!(
+            format!("{strict:?}") == format!("{full:?}"),
+            "strict strings that all decode read as lenient ones"
+        );
+    }
+    if let Some(first) = full.data.first() {
+        let kept = first.name.clone();
+        let filtered = PyulogOptions {
+            filter: NameFilter::Names(vec![kept.clone()]),
+            ..Default::default()
+        };
+        let filtered = pyulog::read(data, &filtered).expect("a filter adds no failure");
+        let expected: Vec<_> = full.data.iter().filter(|d| d.name == kept).collect();
+        let got: Vec<_> = filtered.data.iter().collect();
+        assert_eq!(got, expected, "the filtered read's datasets of `{kept}`");
+    }
+    if let Ok(log) = Log::from_slice(data) {
+        let recovered = pyulog::recovered_datasets(&log, &full, &NameFilter::All);
+        whole_rows(&pyulog::PyulogFile {
+            data: recovered,
+            ..Default::default()
+        });
+    }
+}

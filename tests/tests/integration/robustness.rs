@@ -687,7 +687,7 @@ type FuzzCheck = fn(&[u8]);
 #[test]
 fn fuzz_regressions_pass() {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fuzz_regressions");
-    let targets: [(&str, FuzzCheck); 10] = [
+    let targets: [(&str, FuzzCheck); 11] = [
         ("whole_file", fuzz_checks::whole_file),
         ("stream_chunks", fuzz_checks::stream_chunks),
         ("format_roundtrip", fuzz_checks::format_roundtrip),
@@ -698,6 +698,7 @@ fn fuzz_regressions_pass() {
         ("writer_ops", fuzz_checks::writer_ops),
         ("rewrite", fuzz_checks::rewrite),
         ("parquet", fuzz_checks::parquet),
+        ("pyulog_compat", fuzz_checks::pyulog_compat),
     ];
     let mut ran = 0;
     for (target, check) in targets {
@@ -727,6 +728,22 @@ fn the_parquet_fuzz_check_passes_on_every_corpus_log() {
         assert!(
             outcome.is_ok(),
             "{}: the parquet check fails",
+            short_name(&path)
+        );
+    }
+}
+
+/// The pyulog-compatibility fuzz check on every corpus log: pyulog's reading under each
+/// option ends and the options agree (whole rows, header-only formats, strict strings, a
+/// topic filter, the recovered datasets).
+#[test]
+fn the_pyulog_compat_fuzz_check_passes_on_every_corpus_log() {
+    for path in corpus_files() {
+        let data = std::fs::read(&path).unwrap();
+        let outcome = std::panic::catch_unwind(|| fuzz_checks::pyulog_compat(&data));
+        assert!(
+            outcome.is_ok(),
+            "{}: the pyulog_compat check fails",
             short_name(&path)
         );
     }
