@@ -263,3 +263,24 @@ def test_a_short_read_pyulog_would_repeat_forever_ends(capsys):
     u = ulog.ULog(io.BytesIO(bytes(f)))
     assert u.file_corruption and u.data_list == []
     capsys.readouterr()
+
+
+def test_a_filtered_read_of_a_damaged_log_is_pyulogs(fuzz_regressions, capsys):
+    """On a damaged log, pyulog's recovery keeps other rows of a topic when the others are
+    filtered out (`message_name_filter_list`); `ulog.ULog` with the same filter gives what
+    pyulog gives, not the unfiltered read's rows (an input the `pyulog_compat` fuzz target
+    found)."""
+    path = str(fuzz_regressions / "pyulog_compat" / "filtered-damaged-log")
+    full = pyulog.ULog(path)
+    names = sorted({d.name for d in full.data_list})
+    differs = []
+    for name in names:
+        theirs = pyulog.ULog(path, [name])
+        ours = ulog.ULog(path, [name])
+        capsys.readouterr()
+        check_pair(theirs, ours)
+        rows = lambda u: [(d.multi_id, len(next(iter(d.data.values())))) for d in u.data_list if d.name == name]
+        if rows(theirs) != rows(full):
+            differs.append(name)
+    # The case this test is for: pyulog's filtered read is not a subset of its full one.
+    assert differs, "pyulog reads this damaged log alike with and without a filter"
