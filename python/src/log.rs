@@ -294,15 +294,16 @@ impl Log {
     }
 
     fn __repr__(&self) -> String {
+        let (instances, rows) = (self.log.topics().len(), self.log.row_count());
         format!(
-            "<ulog.Log {} ({} topic instances, {} rows)>",
+            "<ulog.Log {} ({instances} topic instance{}, {rows} row{})>",
             if self.name.is_empty() {
                 "(bytes)"
             } else {
                 &self.name
             },
-            self.log.topics().len(),
-            self.log.row_count()
+            if instances == 1 { "" } else { "s" },
+            if rows == 1 { "" } else { "s" },
         )
     }
 }
@@ -486,12 +487,13 @@ impl Table {
     }
 
     fn __repr__(&self) -> String {
+        let (rows, columns) = (self.rows, self.schema.fields().len());
         format!(
-            "<ulog.Table {} #{}: {} rows, {} columns>",
+            "<ulog.Table {} #{}: {rows} row{}, {columns} column{}>",
             self.topic,
             self.multi_id,
-            self.rows,
-            self.schema.fields().len()
+            if rows == 1 { "" } else { "s" },
+            if columns == 1 { "" } else { "s" },
         )
     }
 }

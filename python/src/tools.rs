@@ -50,6 +50,24 @@ pub(crate) fn to_parquet<'py>(
     let threads = threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, std::num::NonZero::get));
     let (wanted, window) = (options.topics.clone(), options.window);
+    // As `ulog parquet -m`: a topic no log defines fails before any log is converted; one
+    // that some logs lack is said of each of them.
+    let check = py.detach(|| ulog_runtime::read::check_topics(&paths, &wanted));
+    if let Some(missing) = check.missing.iter().find(|m| m.in_none) {
+        let hint = match missing.suggestions.as_slice() {
+            [] => " (`ulog.open(path).topics()` lists a log's topics)".to_owned(),
+            names => ulog_runtime::schema::did_you_mean(names),
+        };
+        let topic = &missing.topic;
+        let message = match paths.as_slice() {
+            [path] => format!("{}: no topic `{topic}` in this log{hint}", path.display()),
+            _ if !check.unreadable.is_empty() => {
+                format!("no topic `{topic}` in any of the logs that can be read{hint}")
+            }
+            _ => format!("no topic `{topic}` in any of the logs{hint}"),
+        };
+        return Err(pyo3::exceptions::PyKeyError::new_err(message));
+    }
     let converter = Converter::new(out_dir, options);
     let results = py.detach(|| converter.convert_files(&paths, threads));
     let out = PyList::empty(py);
@@ -84,7 +102,14 @@ pub(crate) fn to_parquet<'py>(
                     s.ignored_appended_offsets.clone(),
                 )?;
                 d.set_item("skipped", skipped)?;
-                d.set_item("said", c.lines(&wanted, &window))?;
+                let mut said: Vec<String> = check
+                    .missing
+                    .iter()
+                    .filter(|m| m.lacking.contains(path))
+                    .map(|m| format!("no topic `{}` in this log", m.topic))
+                    .collect();
+                said.extend(c.lines(&wanted, &window));
+                d.set_item("said", said)?;
             }
             Err(e) => {
                 d.set_item("ok", false)?;

@@ -212,16 +212,28 @@ def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
     assert meta["analysis"]["battery"]["instances"]
     hive = ulog.to_parquet(str(good), tmp_path / "hive", layout="hive", topics=["battery_status"])
     assert all(f["topic"] == "battery_status" for f in hive[0]["files"])
-    # One topic as a str is that topic; a topic no log has rows of is a warning.
+    # One topic as a str is that topic.
     one = ulog.to_parquet(str(good), tmp_path / "one", topics="battery_status")
     assert {f["topic"] for f in one[0]["files"]} == {"battery_status"}
+    # A topic no log defines: a KeyError naming the closest, before anything is written
+    # (as `ulog parquet -m`); one that only some logs define: said of the others.
+    with pytest.raises(KeyError, match="no topic `batery_status` in this log; did you mean `battery_status`"):
+        ulog.to_parquet(str(good), tmp_path / "none", topics=["batery_status"])
+    assert not (tmp_path / "none").exists()
+    with pytest.raises(KeyError, match="no topic `batery_status` in any of the logs that can be read; did you mean"):
+        ulog.to_parquet([good, bad], tmp_path / "none", topics=["batery_status"])
+    lacking = next(
+        p for p in sorted(corpus_dir().rglob("*.ulg"))
+        if "battery_status" not in ulog.ULog(str(p), parse_header_only=True).message_formats
+    )
     with pytest.warns(UserWarning) as said:
-        none = ulog.to_parquet(str(good), tmp_path / "none", topics=["batery_status"])
-    assert none[0]["ok"] and none[0]["files"] == []
-    assert [str(w.message) for w in said] == [
-        f"{good}: no Parquet file written: the topics asked for have no rows that can be read",
-        "no log has rows of topic `batery_status`",
-    ]
+        some = ulog.to_parquet([good, lacking], tmp_path / "some", topics=["battery_status"])
+    assert some[1]["ok"] and some[1]["said"][0] == "no topic `battery_status` in this log"
+    assert f"{lacking}: no topic `battery_status` in this log" in [str(w.message) for w in said]
+    assert "no topic" not in " ".join(some[0]["said"])
+    for bad_args, what in [(dict(topics=[]), "topics=\\[\\] names no topic"), (dict(threads=0), "1 or more"), (dict(threads=-1), "1 or more")]:
+        with pytest.raises(ValueError, match=what):
+            ulog.to_parquet(str(good), tmp_path / "x", **bad_args)
     # No log converted: the errors say why, and no topic is warned of.
     with warnings.catch_warnings():
         warnings.simplefilter("error")
@@ -372,6 +384,32 @@ def test_a_log_closes_at_the_end_of_a_with_block():
     assert pyarrow.table(table).num_rows == first["rows"] > 0
     log.close()  # closing again is harmless
     assert log.closed
+    assert repr(log) == "<ulog.Log (closed)>"
+    with pytest.raises(ValueError, match="the log is closed"):
+        with log:
+            pass
+
+
+def test_misused_arguments_are_clear_errors(tmp_path):
+    from conftest import corpus_dir
+
+    path = corpus_dir() / "pyulog" / "sample_log_small.ulg"
+    log = ulog.open(path)
+    for wrong in ["0", None, 0.0, True]:
+        with pytest.raises(TypeError, match=f"multi_id must be an int, not {type(wrong).__name__}"):
+            log.table("vehicle_attitude", wrong)
+    with pytest.raises(ValueError, match=r"columns named more than once: \['q\[0\]'\]"):
+        log.table("vehicle_attitude", columns=["q[0]", "timestamp", "q[0]"])
+    assert log.table("vehicle_attitude", columns=["q[1]", "q[0]"]).column_names == ["q[1]", "q[0]"]
+    # A path that is not a regular file: refused by name, as the CLI does, not mapped.
+    with pytest.raises(ulog.ULogIOError, match="is not a regular file"):
+        ulog.open("/dev/null")
+    with pytest.raises(ulog.ULogIOError, match="is a folder, not a log file"):
+        ulog.open(tmp_path)
+    assert "(70 topic instances, 14604 rows)" in repr(log)
+    one = corpus_dir() / "yule_log" / "short_list.ulg"
+    assert repr(ulog.open(one)).endswith("(1 topic instance, 10 rows)>")
+    assert repr(ulog.open(one).table("list_data", columns="timestamp")) == "<ulog.Table list_data #0: 10 rows, 1 column>"
 
 
 def test_the_start_date_is_the_headers_or_the_first_gps_fixs(capsys):

@@ -79,6 +79,9 @@ class _Closed:
     def __getattr__(self, name: str) -> Any:
         raise ValueError("the log is closed")
 
+    def __repr__(self) -> str:
+        return "<ulog.Log (closed)>"
+
 
 _CLOSED = _Closed()
 
@@ -103,6 +106,8 @@ class Log:
         return self._native is _CLOSED
 
     def __enter__(self) -> "Log":
+        if self.closed:
+            raise ValueError("the log is closed")
         return self
 
     def __exit__(self, *exc: Any) -> None:
@@ -177,8 +182,9 @@ class Log:
         return self._native.events()
 
     def topics(self) -> List[Dict[str, Any]]:
-        """Topic instances with rows: ``name``, ``multi_id``, ``rows``, ``first_timestamp``,
-        ``last_timestamp``."""
+        """Topic instances with rows: ``name``, ``multi_id``, ``rows``, ``first_timestamp``
+        and ``last_timestamp`` (µs: the first and the last row's in file order, so on a log
+        whose timestamps jump back the first may be the later)."""
         return self._native.topics()
 
     def table(
@@ -189,13 +195,25 @@ class Log:
         start: Optional[float] = None,
         end: Optional[float] = None,
     ) -> Table:
-        """A topic instance's columns (only ``columns`` if given: names, or one name as a
-        str), the rows from ``start`` to ``end`` seconds as ``ulog csv --start --end`` takes
-        them. KeyError (naming the closest) for a topic, instance or column the log lacks;
-        ValueError for a bound that is NaN or infinite, or an ``end`` at or before
-        ``start``."""
+        """A topic instance's columns (only ``columns`` if given, in that order: names, or
+        one name as a str; an empty list gives the rows with no column), the rows from
+        ``start`` to ``end`` seconds (of the log's clock, as ``ulog csv --start --end``
+        takes them). The window is positional, as pyulog's ``ulog2csv`` makes it: from the
+        first row whose timestamp is at or after ``start`` up to (not including) the first
+        row at or after ``end``, so on a log whose timestamps jump back (a damaged one) it
+        is not a filter on each row's time. KeyError (naming the closest) for a topic,
+        instance or column the log lacks; TypeError for a ``multi_id`` that is not an int;
+        ValueError for a column named twice, a bound that is NaN or infinite, or an ``end``
+        at or before ``start``."""
         if isinstance(columns, str):
             columns = [columns]
+        if columns is not None:
+            columns = list(columns)
+            repeated = sorted({c for c in columns if columns.count(c) > 1})
+            if repeated:
+                raise ValueError(f"columns named more than once: {repeated}")
+        if isinstance(multi_id, bool) or not isinstance(multi_id, int):
+            raise TypeError(f"multi_id must be an int, not {type(multi_id).__name__}")
         if not 0 <= multi_id <= 255:
             # Beyond what an instance number can be: the log's instances of the topic, as
             # for any instance it lacks (or the native error if it lacks the topic).
@@ -204,7 +222,7 @@ class Log:
                 raise KeyError(f"`{topic}` has no instance {multi_id} (instances: {have})")
             multi_id = 0
         return Table(
-            self._native.table(topic, multi_id, list(columns) if columns is not None else None, start, end)
+            self._native.table(topic, multi_id, columns, start, end)
         )
 
     def tables(self) -> Dict[tuple, Table]:
@@ -224,7 +242,14 @@ def open(  # noqa: A001
     source: Union[str, "os.PathLike[str]", bytes, bytearray, memoryview, BinaryIO],
 ) -> Log:
     """Opens a log: a path (memory-mapped, not read into memory), the file's bytes, or a
-    binary file object (read from its position to its end, into memory)."""
+    binary file object (read from its position to its end, into memory).
+
+    A path must name a regular file (a folder, device or pipe is a ``ULogIOError``). Like
+    every memory-mapped reader, a ``Log`` opened from a path needs the file not to be
+    truncated or rewritten in place while it is open: the operating system ends the
+    process (``SIGBUS``) when a page the file no longer has is read. For a file that may
+    change meanwhile (a log being downloaded again, rotated), open its bytes:
+    ``ulog.open(pathlib.Path(path).read_bytes())``."""
     if isinstance(source, (bytearray, memoryview)):
         source = bytes(source)
     elif not isinstance(source, (str, bytes, os.PathLike)):
@@ -255,21 +280,27 @@ def to_parquet(
     ``"hive"``, only ``topics`` if given, ``threads`` logs at once, the flight analysis in
     each ``metadata.json`` unless ``analysis=False``, only the rows from ``start`` to
     ``end`` seconds as ``ulog parquet --start --end`` takes them; ``topics`` names, or one
-    name as a str). One dict per log, in order: ``ok`` and what it wrote (``files``,
+    name as a str, never an empty list; ``threads`` None for one per core). One dict per log, in order: ``ok`` and what it wrote (``files``,
     ``metadata``, ``log_dir``, ``notes``, and ``skipped``: what reading left out, as
     ``unreadable_topics`` of (topic, msg_id, why), ``misfit_rows`` of (topic, multi_id,
     rows), ``orphan_rows``, ``unusable_messages``, ``damaged_bytes`` and
     ``ignored_appended_offsets`` (appended data not read); and ``said``, the
     lines ``ulog parquet`` prints of the log on stderr), or ``error``; a log that fails does
     not stop the others. What ``ulog parquet`` says on stderr is a ``UserWarning``: each
-    log's ``said`` (its notes, what reading left out, no file written), and a topic of
-    ``topics`` that no converted log has rows of (in the window). ValueError, before any log
-    is read, for a bound that is NaN, infinite or beyond any log time, or an ``end`` at or
-    before ``start``."""
+    log's ``said`` (a topic of ``topics`` the log does not define, its notes, what reading
+    left out, no file written), and a topic of ``topics`` that no converted log has rows of
+    (in the window). Before any log is converted, as ``ulog parquet -m``: KeyError for a
+    topic of ``topics`` that no log defines (naming the closest topics the logs have);
+    ValueError for a bound that is NaN, infinite or beyond any log time, an ``end`` at or
+    before ``start``, an empty ``topics`` or a ``threads`` below 1."""
     if isinstance(paths, (str, os.PathLike)):
         paths = [paths]
     if isinstance(topics, str):
         topics = [topics]
+    if topics is not None and len(topics) == 0:
+        raise ValueError("topics=[] names no topic; topics=None converts every topic")
+    if threads is not None and (isinstance(threads, bool) or not isinstance(threads, int) or threads < 1):
+        raise ValueError(f"threads is how many logs are converted at once, 1 or more (None: one per core), not {threads!r}")
     results = _ulog.to_parquet(
         [os.fspath(p) for p in paths],
         os.fspath(out_dir),

@@ -722,12 +722,17 @@ fn fuzz_regressions_pass() {
 /// its rows and row groups, its `FLOAT` statistics those of its values.
 #[test]
 fn the_parquet_fuzz_check_passes_on_every_corpus_log() {
+    fuzz_check_on_every_corpus_log("parquet", fuzz_checks::parquet);
+}
+
+/// Runs a fuzz target's check on every corpus log; a failure names the log.
+fn fuzz_check_on_every_corpus_log(target: &str, check: FuzzCheck) {
     for path in corpus_files() {
         let data = std::fs::read(&path).unwrap();
-        let outcome = std::panic::catch_unwind(|| fuzz_checks::parquet(&data));
+        let outcome = std::panic::catch_unwind(|| check(&data));
         assert!(
             outcome.is_ok(),
-            "{}: the parquet check fails",
+            "{}: the {target} check fails",
             short_name(&path)
         );
     }
@@ -738,15 +743,7 @@ fn the_parquet_fuzz_check_passes_on_every_corpus_log() {
 /// topic filter, the recovered datasets).
 #[test]
 fn the_pyulog_compat_fuzz_check_passes_on_every_corpus_log() {
-    for path in corpus_files() {
-        let data = std::fs::read(&path).unwrap();
-        let outcome = std::panic::catch_unwind(|| fuzz_checks::pyulog_compat(&data));
-        assert!(
-            outcome.is_ok(),
-            "{}: the pyulog_compat check fails",
-            short_name(&path)
-        );
-    }
+    fuzz_check_on_every_corpus_log("pyulog_compat", fuzz_checks::pyulog_compat);
 }
 
 /// Every single-bit flip of the size field of rows of every clean corpus log loses at most

@@ -322,50 +322,31 @@ pub(crate) fn check_topics(log: &Log<'_>, path: &Path, topics: &[String]) -> Res
     }
 }
 
-/// Before any conversion, from each log's definitions section: a `-m` topic that no log
+/// Before any conversion ([`crate::read::check_topics`]): a `-m` topic that no log
 /// defines is an error (naming the closest topics), as for every verb; one that only some
 /// logs lack is said on stderr for each of them (a fleet's logs need not share topics).
 /// Logs that cannot be read are left to the conversion to report.
 pub(crate) fn check_topics_in_files(files: &[PathBuf], topics: &[String]) -> Result<(), Failure> {
-    if topics.is_empty() {
-        return Ok(());
-    }
-    let definitions: Vec<_> = files
-        .iter()
-        .filter_map(|path| {
-            let file = std::io::BufReader::new(std::fs::File::open(path).ok()?);
-            Some((path, crate::StreamReader::read_definitions(file).ok()?))
-        })
-        .collect();
-    for topic in topics {
-        let lacking: Vec<_> = definitions
-            .iter()
-            .filter(|(_, meta)| meta.schema().get(topic).is_none())
-            .collect();
-        if lacking.is_empty() {
-            continue;
-        }
-        if lacking.len() == definitions.len() {
-            let mut names: Vec<String> = Vec::new();
-            for (_, meta) in &definitions {
-                for name in meta.schema().suggest(topic) {
-                    if !names.contains(&name) {
-                        names.push(name);
-                    }
-                }
-            }
-            let hint = did_you_mean(&names);
+    let check = crate::read::check_topics(files, topics);
+    for missing in &check.missing {
+        if missing.in_none {
+            let hint = did_you_mean(&missing.suggestions);
+            let topic = &missing.topic;
             return Err(match files {
                 [path] => Failure::at(path, format!("no topic `{topic}` in this log{hint}")),
-                _ if definitions.len() < files.len() => Failure::exit(
+                _ if !check.unreadable.is_empty() => Failure::exit(
                     1,
                     format!("no topic `{topic}` in any of the logs that can be read{hint}"),
                 ),
                 _ => Failure::exit(1, format!("no topic `{topic}` in any of the logs{hint}")),
             });
         }
-        for (path, _) in lacking {
-            eprintln!("ulog: {}: no topic `{topic}` in this log", path.display());
+        for path in &missing.lacking {
+            eprintln!(
+                "ulog: {}: no topic `{}` in this log",
+                path.display(),
+                missing.topic
+            );
         }
     }
     Ok(())

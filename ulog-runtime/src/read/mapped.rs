@@ -8,7 +8,11 @@ use super::log::{Fold, RowSink, Summary, Visiting, all_cores, collect, summary};
 use super::{Metadata, ReadError, Row};
 
 /// A file mapped read-only into memory. Like every memory-mapped reader, it needs the file
-/// not to be truncated by another process while the map lives.
+/// not to be truncated or rewritten in place by another process while the map lives: the
+/// operating system ends the process (`SIGBUS`) when it reads a page the file no longer has.
+/// For a file that may change meanwhile, read it into memory instead ([`Log::from_vec`]).
+///
+/// [`Log::from_vec`]: crate::Log::from_vec
 ///
 /// ```no_run
 /// use ulog_runtime::read::MappedFile;
@@ -28,17 +32,11 @@ const RELEASE_STEP: u64 = 8 << 20;
 const RELEASE_MARGIN: u64 = 256 << 10;
 
 impl MappedFile {
-    /// Maps a file. A folder is an error of kind `IsADirectory` ("is a folder, not a log
-    /// file"), not the map's "no such device".
+    /// Maps a regular file. A folder or anything else ([`open_file`](super::open_file)'s
+    /// errors: "is a folder, not a log file", "is not a regular file") is refused before
+    /// the map would say "no such device".
     pub fn open(path: impl AsRef<Path>) -> Result<MappedFile, ReadError> {
-        let file = std::fs::File::open(path)?;
-        if file.metadata()?.is_dir() {
-            return Err(std::io::Error::new(
-                std::io::ErrorKind::IsADirectory,
-                "is a folder, not a log file",
-            )
-            .into());
-        }
+        let file = super::open_file(path)?;
         // SAFETY: the map is only read; the caller is told not to truncate the file meanwhile,
         // which is the contract of every memory-mapped file reader.
         #[allow(unsafe_code)]

@@ -2,6 +2,7 @@
 //! `io::Read` ([`StreamReader`]). Both share one framer (message boundaries and corruption
 //! recovery) and one interpreter ([`Metadata`]).
 
+mod file;
 mod framer;
 mod gps_clock;
 mod log;
@@ -13,6 +14,7 @@ mod stream;
 mod threads;
 mod topics;
 
+pub use file::open_file;
 pub use gps_clock::GpsClock;
 pub use log::{DataRows, Log, Rows, Summary, fold_rows, fold_rows_on, summarize};
 pub(crate) use log::{RowVisitor, all_cores, visit_rows};
@@ -30,7 +32,7 @@ pub use metadata::{
 pub(crate) use metadata::{key_name, text_of};
 pub use stream::{Event, RawMessage, StreamReader};
 pub(crate) use threads::on_threads;
-pub use topics::{InstanceRows, Skipped, TopicSummary};
+pub use topics::{InstanceRows, MissingTopic, Skipped, TopicCheck, TopicSummary, check_topics};
 
 use crate::error::{Diagnostic, DiagnosticKind, ReadError};
 use crate::schema::{Primitive, Schema};

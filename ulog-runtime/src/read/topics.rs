@@ -1,7 +1,100 @@
 //! What pyulog users look for first in a whole-file [`Log`]: the topics with their row
-//! counts and time ranges, and the parameter changes grouped by name.
+//! counts and time ranges, and the parameter changes grouped by name; and, before a
+//! conversion of several files, which of them define the topics asked for by name
+//! ([`check_topics`]).
+
+use std::path::{Path, PathBuf};
 
 use super::{Log, ParameterChange, Subscription};
+
+/// Topics asked for by name, checked against the definitions section of each of a set of
+/// files ([`check_topics`]).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct TopicCheck {
+    /// Each topic asked for that one file or more does not define, in the order asked.
+    pub missing: Vec<MissingTopic>,
+    /// The files whose definitions could not be read (left to the conversion to report).
+    pub unreadable: Vec<PathBuf>,
+}
+
+/// A topic asked for that some files do not define ([`TopicCheck`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MissingTopic {
+    /// The name asked for.
+    pub topic: String,
+    /// The files that do not define it (of those whose definitions could be read), in order.
+    pub lacking: Vec<PathBuf>,
+    /// No file that could be read defines it: a misspelling, most likely.
+    pub in_none: bool,
+    /// When `in_none`, the closest names the files define (each once, each file's
+    /// closest first, files in order); else empty.
+    pub suggestions: Vec<String>,
+}
+
+/// Which of `files` define each of `topics` (a `-m` list, pyulog's
+/// `message_name_filter_list`), from each file's definitions section only, before a
+/// conversion reads them whole: a topic no file defines is most likely misspelled (with the
+/// closest names), one only some files lack is normal in a fleet. Files that cannot be
+/// opened or whose definitions cannot be read are listed apart.
+///
+/// ```
+/// # use ulog_runtime::{ULog, Writer, WriterOptions};
+/// # #[derive(ULog)] struct Battery { timestamp: u64, voltage_v: f32 }
+/// # let mut w = Writer::new(Vec::new(), WriterOptions::default())?;
+/// # w.topic::<Battery>(0)?;
+/// # let path = std::env::temp_dir().join(format!("check_topics_{}.ulg", std::process::id()));
+/// # std::fs::write(&path, w.into_inner())?;
+/// let check = ulog_runtime::read::check_topics(&[&path], &["batery".to_owned()]);
+/// # std::fs::remove_file(&path)?;
+/// assert!(check.missing[0].in_none);
+/// assert_eq!(check.missing[0].suggestions, ["battery"]);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn check_topics(files: &[impl AsRef<Path>], topics: &[String]) -> TopicCheck {
+    let mut check = TopicCheck::default();
+    if topics.is_empty() {
+        return check;
+    }
+    let mut definitions = Vec::new();
+    for path in files {
+        let path = path.as_ref();
+        let read = super::open_file(path)
+            .map_err(crate::ReadError::from)
+            .and_then(|f| super::StreamReader::read_definitions(std::io::BufReader::new(f)));
+        match read {
+            Ok(meta) => definitions.push((path, meta)),
+            Err(_) => check.unreadable.push(path.to_path_buf()),
+        }
+    }
+    for topic in topics {
+        let lacking: Vec<PathBuf> = definitions
+            .iter()
+            .filter(|(_, meta)| meta.schema().get(topic).is_none())
+            .map(|(path, _)| path.to_path_buf())
+            .collect();
+        if lacking.is_empty() {
+            continue;
+        }
+        let in_none = lacking.len() == definitions.len();
+        let mut suggestions: Vec<String> = Vec::new();
+        if in_none {
+            for (_, meta) in &definitions {
+                for name in meta.schema().suggest(topic) {
+                    if !suggestions.contains(&name) {
+                        suggestions.push(name);
+                    }
+                }
+            }
+        }
+        check.missing.push(MissingTopic {
+            topic: topic.clone(),
+            lacking,
+            in_none,
+            suggestions,
+        });
+    }
+    check
+}
 
 /// One topic instance of a log ([`Log::topics`]): every subscription of that name and
 /// `multi_id` together.

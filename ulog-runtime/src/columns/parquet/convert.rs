@@ -191,7 +191,7 @@ impl Converter {
             log: path.display().to_string(),
             source: ReadError::Io(e),
         };
-        let file = File::open(path).map_err(read_error)?;
+        let file = crate::read::open_file(path).map_err(read_error)?;
         let source = Source {
             file_name: &name,
             label: &path.display().to_string(),
