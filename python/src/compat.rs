@@ -8,7 +8,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyList, PyString, PyTuple};
 use ulog_runtime::compat::pyulog::{self, NameFilter, PyulogError, PyulogFile, PyulogOptions};
 
-use crate::errors::{NotAULogError, ULogIOError, UnsupportedFlagError};
+use crate::errors::{NotAULogError, UnsupportedFlagError, io_error};
 use crate::values::py_value;
 
 /// Reads `source` (a path, or the file's bytes from its current position `base_offset`)
@@ -61,7 +61,7 @@ pub(crate) fn read_pyulog<'py>(
     };
     match read {
         Ok(f) => to_dict(py, f),
-        Err(Err(io)) => Err(ULogIOError::new_err(io)),
+        Err(Err(io)) => Err(io_error(io, None, None)),
         Err(Ok(e)) => Err(raise(py, e)),
     }
 }

@@ -21,7 +21,7 @@ fn _ulog(m: &Bound<'_, PyModule>) -> PyResult<()> {
         "UnsupportedFlagError",
         py.get_type::<errors::UnsupportedFlagError>(),
     )?;
-    m.add("ULogIOError", py.get_type::<errors::ULogIOError>())?;
+    m.add("ULogIOError", errors::io_error_type(py)?)?;
     m.add_function(wrap_pyfunction!(compat::read_pyulog, m)?)?;
     m.add_class::<log::Log>()?;
     m.add_class::<log::Table>()?;

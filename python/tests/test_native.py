@@ -2,9 +2,11 @@
 copy) equal to pyulog's columns, the log's metadata, Parquet, the command-line tool, and
 threads reading at once."""
 
+import errno
 import inspect
 import io
 import json
+import os
 import struct
 import subprocess
 import sys
@@ -406,6 +408,17 @@ def test_misused_arguments_are_clear_errors(tmp_path):
         ulog.open("/dev/null")
     with pytest.raises(ulog.ULogIOError, match="is a folder, not a log file"):
         ulog.open(tmp_path)
+    pipe = tmp_path / "pipe.ulg"
+    os.mkfifo(pipe)
+    with pytest.raises(ulog.ULogIOError, match="is not a regular file"):
+        ulog.open(pipe)  # refused, not waited on for a writer
+    # An I/O error is an OSError too, with its errno and file name.
+    missing = tmp_path / "missing.ulg"
+    with pytest.raises(OSError) as raised:
+        ulog.open(missing)
+    assert isinstance(raised.value, ulog.ULogError) and isinstance(raised.value, ulog.ULogIOError)
+    assert raised.value.errno == errno.ENOENT and raised.value.filename == str(missing)
+    assert str(raised.value) == f"{missing}: I/O error: No such file or directory (os error 2)"
     assert "(70 topic instances, 14604 rows)" in repr(log)
     one = corpus_dir() / "yule_log" / "short_list.ulg"
     assert repr(ulog.open(one)).endswith("(1 topic instance, 10 rows)>")
