@@ -284,3 +284,27 @@ def test_a_filtered_read_of_a_damaged_log_is_pyulogs(fuzz_regressions, capsys):
             differs.append(name)
     # The case this test is for: pyulog's filtered read is not a subset of its full one.
     assert differs, "pyulog reads this damaged log alike with and without a filter"
+
+
+def test_array_sizes_in_any_characters_read_as_pyulog_reads_them(capsys):
+    """pyulog slices a field's type by characters (`type_str[a+1:-1]` without a `]`) and
+    `int()` takes any Unicode decimal digit: so do we (a multi-byte last character once
+    made the Rust reader panic; a fuzzer's input)."""
+    import struct
+
+    def msg(t, body):
+        return struct.pack("<HB", len(body), ord(t)) + body
+
+    head = b"ULog\x01\x12\x35\x01" + struct.pack("<Q", 0) + msg("B", bytes(40))
+    for ty in ["float[2\u02db", "float[\u02db", "uint8_t[\u00e93]", "float[3]\u00e9", "float[\u0663]", "float[\u0967\u0966]"]:
+        data = (
+            head
+            + msg("F", f"t:uint64_t timestamp;{ty} x;".encode())
+            + msg("A", struct.pack("<BH", 0, 1) + b"t")
+            + msg("D", struct.pack("<HQ", 1, 5) + bytes(8))
+        )
+        theirs = pyulog.ULog(io.BytesIO(data))
+        printed = capsys.readouterr().out
+        ours = ulog.ULog(io.BytesIO(data))
+        assert capsys.readouterr().out == printed, ty
+        check_pair(theirs, ours)

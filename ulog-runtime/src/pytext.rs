@@ -100,7 +100,9 @@ fn python_style(sci: &str, positional: bool) -> String {
 }
 
 /// Python's `int()` of a text: an optional sign, decimal digits (single underscores between
-/// them), surrounding whitespace; `None` for anything else (or a number past `i128`).
+/// them; any Unicode decimal digit, as `int("٣")` is 3), surrounding whitespace (Unicode's,
+/// which is what `int()` strips: not `\x1c` to `\x1f`, which `str.isspace` also counts);
+/// `None` for anything else (or a number past `i128`).
 pub(crate) fn python_int(text: &str) -> Option<i128> {
     let t = text.trim();
     let digits = t.strip_prefix(['+', '-']).unwrap_or(t);
@@ -108,12 +110,38 @@ pub(crate) fn python_int(text: &str) -> Option<i128> {
         || digits.starts_with('_')
         || digits.ends_with('_')
         || digits.contains("__")
-        || !digits.chars().all(|c| c.is_ascii_digit() || c == '_')
     {
         return None;
     }
-    let v: i128 = digits.replace('_', "").parse().ok()?;
+    let mut v: i128 = 0;
+    for c in digits.chars().filter(|&c| c != '_') {
+        v = v
+            .checked_mul(10)?
+            .checked_add(i128::from(decimal_digit(c)?))?;
+    }
     Some(if t.starts_with('-') { -v } else { v })
+}
+
+/// The first of each run of ten Unicode decimal digits (general category `Nd`, zero to
+/// nine in order), as Python 3.11's `unicodedata` (Unicode 14.0) lists them.
+const DIGIT_ZEROS: [u32; 66] = [
+    0x0030, 0x0660, 0x06F0, 0x07C0, 0x0966, 0x09E6, 0x0A66, 0x0AE6, 0x0B66, 0x0BE6, 0x0C66, 0x0CE6,
+    0x0D66, 0x0DE6, 0x0E50, 0x0ED0, 0x0F20, 0x1040, 0x1090, 0x17E0, 0x1810, 0x1946, 0x19D0, 0x1A80,
+    0x1A90, 0x1B50, 0x1BB0, 0x1C40, 0x1C50, 0xA620, 0xA8D0, 0xA900, 0xA9D0, 0xA9F0, 0xAA50, 0xABF0,
+    0xFF10, 0x104A0, 0x10D30, 0x11066, 0x110F0, 0x11136, 0x111D0, 0x112F0, 0x11450, 0x114D0,
+    0x11650, 0x116C0, 0x11730, 0x118E0, 0x11950, 0x11C50, 0x11D50, 0x11DA0, 0x16A60, 0x16AC0,
+    0x16B50, 0x1D7CE, 0x1D7D8, 0x1D7E2, 0x1D7EC, 0x1D7F6, 0x1E140, 0x1E2F0, 0x1E950, 0x1FBF0,
+];
+
+/// The value of a Unicode decimal digit, as Python's `unicodedata.decimal`.
+fn decimal_digit(c: char) -> Option<u8> {
+    let c = u32::from(c);
+    let zero = match DIGIT_ZEROS.binary_search(&c) {
+        Ok(i) => DIGIT_ZEROS[i],
+        Err(0) => return None,
+        Err(i) => DIGIT_ZEROS[i - 1],
+    };
+    u8::try_from(c - zero).ok().filter(|&d| d < 10)
 }
 
 #[cfg(test)]
@@ -126,9 +154,19 @@ mod tests {
         assert_eq!(python_int(" +1_000 \n"), Some(1000));
         assert_eq!(python_int("-7"), Some(-7));
         assert_eq!(python_int("007"), Some(7));
-        for bad in ["", "-", "_1", "1_", "1__0", "1.0", "0x10", "+-1", "1 2"] {
+        for bad in [
+            "", "-", "_1", "1_", "1__0", "1.0", "0x10", "+-1", "1 2", "²", "Ⅻ", "½",
+        ] {
             assert_eq!(python_int(bad), None, "{bad:?}");
         }
+        // int("٣") == 3, int("१०") == 10, int("\x857\u3000") == 7, int("1_٣") == 13; int("\x1c7")
+        // is a ValueError.
+        assert_eq!(python_int("٣"), Some(3));
+        assert_eq!(python_int("१०"), Some(10));
+        assert_eq!(python_int("\u{85}7\u{3000}"), Some(7));
+        assert_eq!(python_int("\x1c7"), None);
+        assert_eq!(python_int("1_٣"), Some(13));
+        assert_eq!(python_int("-𝟗"), Some(-9));
     }
 
     #[test]

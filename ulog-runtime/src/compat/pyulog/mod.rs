@@ -595,10 +595,12 @@ impl<'a> Reader<'a> {
             match type_str.find('[') {
                 None => fields.push((type_str.to_owned(), 0, field)),
                 Some(a) => {
-                    // Python's `type_str[a+1:b]`, `b` -1 when there is no `]`.
+                    // Python's `type_str[a+1:b]`, `b` -1 when there is no `]`: before the
+                    // last character (not byte: the text may hold any character).
+                    let last_char = type_str.char_indices().last().map_or(0, |(i, _)| i);
                     let b = type_str
                         .find(']')
-                        .map_or(type_str.len().saturating_sub(1) as isize, |b| b as isize);
+                        .map_or(last_char as isize, |b| b as isize);
                     let inner = if (a as isize + 1) < b {
                         &type_str[a + 1..b as usize]
                     } else {

@@ -313,3 +313,30 @@ fn damage_never_hangs_or_panics() {
         let _ = read(&g, &PyulogOptions::default());
     }
 }
+
+#[test]
+fn array_sizes_are_read_by_characters_as_python_slices_them() {
+    // pyulog's `int(type_str[a+1:b])`, `b` -1 without `]`: the slice ends before the last
+    // character, however many bytes it takes (a fuzzer's input panicked on a byte index),
+    // and `int()` takes any Unicode decimal digit. Each checked against pyulog 1.3.0.
+    for (ty, expected) in [
+        ("float[2\u{2db}", Some(("float", 2))),
+        ("float[3]\u{e9}", Some(("float", 3))),
+        ("float[\u{663}]", Some(("float", 3))),
+        ("float[\u{2db}", None),
+        ("uint8_t[\u{e9}3]", None),
+    ] {
+        let mut f = header();
+        f.extend(msg(b'B', &[0; 40]));
+        f.extend(msg(
+            b'F',
+            format!("t:uint64_t timestamp;{ty} x;").as_bytes(),
+        ));
+        let p = parse(&f);
+        let got = p.formats.iter().find(|f| f.name == "t").map(|f| {
+            let (t, n, _) = &f.fields[1];
+            (t.as_str(), *n)
+        });
+        assert_eq!(got, expected, "{ty}");
+    }
+}
