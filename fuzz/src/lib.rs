@@ -821,13 +821,13 @@ pub fn parquet(data: &[u8]) {
     }
 }
 
-/// pyulog's reading (`compat::pyulog`, what `ulog.ULog` shows): every option on the same
-/// bytes ends, without a panic, and agrees with the others. Each dataset holds whole rows;
-/// a header-only read holds no rows and the same definitions' formats; a read with strict
-/// strings, when it succeeds, equals the lenient one (no string was invalid); a filtered
-/// read of an intact log holds exactly the full read's datasets of the topic kept; the
-/// datasets of the rows
-/// this reader recovers hold whole rows too.
+/// pyulog's reading (`compat::pyulog`, what `ulog.ULog` shows) of the same bytes read four
+/// ways (as given; header only; strict strings; filtered to the first dataset's topic by
+/// name) ends without a panic, and the reads agree. Each dataset holds whole rows; a
+/// header-only read holds no rows and the same formats; a read with strict strings, when it
+/// succeeds, equals the lenient one (no string was invalid); the filtered read of an intact
+/// log holds exactly the full read's datasets of that topic; the datasets of the rows this
+/// reader recovers hold whole rows too. (Not tried: a filter by substring, a base offset.)
 pub fn pyulog_compat(data: &[u8]) {
     use ulog_runtime::compat::pyulog::{self, NameFilter, PyulogOptions};
     let whole_rows = |file: &pyulog::PyulogFile| {

@@ -55,7 +55,7 @@ pub(crate) fn to_parquet<'py>(
     let check = py.detach(|| ulog_runtime::read::check_topics(&paths, &wanted));
     if let Some(missing) = check.missing.iter().find(|m| m.in_none) {
         let hint = match missing.suggestions.as_slice() {
-            [] => " (`ulog.open(path).topics()` lists a log's topics)".to_owned(),
+            [] => " (no topic the logs define has a close name)".to_owned(),
             names => ulog_runtime::schema::did_you_mean(names),
         };
         let topic = &missing.topic;

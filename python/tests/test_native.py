@@ -222,6 +222,8 @@ def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
     with pytest.raises(KeyError, match="no topic `batery_status` in this log; did you mean `battery_status`"):
         ulog.to_parquet(str(good), tmp_path / "none", topics=["batery_status"])
     assert not (tmp_path / "none").exists()
+    with pytest.raises(KeyError, match="no topic `zzzzzzzzzzzzzz` in this log \\(no topic the logs define has a close name\\)"):
+        ulog.to_parquet(str(good), tmp_path / "none", topics="zzzzzzzzzzzzzz")
     with pytest.raises(KeyError, match="no topic `batery_status` in any of the logs that can be read; did you mean"):
         ulog.to_parquet([good, bad], tmp_path / "none", topics=["batery_status"])
     lacking = next(
@@ -233,9 +235,19 @@ def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
     assert some[1]["ok"] and some[1]["said"][0] == "no topic `battery_status` in this log"
     assert f"{lacking}: no topic `battery_status` in this log" in [str(w.message) for w in said]
     assert "no topic" not in " ".join(some[0]["said"])
-    for bad_args, what in [(dict(topics=[]), "topics=\\[\\] names no topic"), (dict(threads=0), "1 or more"), (dict(threads=-1), "1 or more")]:
+    for bad_args, what in [
+        (dict(topics=[]), "topics=\\[\\] names no topic"),
+        (dict(topics=iter([])), "topics=\\[\\] names no topic"),
+        (dict(threads=0), "1 or more"),
+        (dict(threads=-1), "1 or more"),
+    ]:
         with pytest.raises(ValueError, match=what):
             ulog.to_parquet(str(good), tmp_path / "x", **bad_args)
+    with pytest.raises(TypeError, match="threads must be an int, not str"):
+        ulog.to_parquet(str(good), tmp_path / "x", threads="2")
+    # Any iterable of names, and numpy's integers for threads.
+    gen = ulog.to_parquet(str(good), tmp_path / "gen", topics=(t for t in ["battery_status"]), threads=np.int64(2))
+    assert {f["topic"] for f in gen[0]["files"]} == {"battery_status"}
     # No log converted: the errors say why, and no topic is warned of.
     with warnings.catch_warnings():
         warnings.simplefilter("error")
@@ -400,6 +412,8 @@ def test_misused_arguments_are_clear_errors(tmp_path):
     for wrong in ["0", None, 0.0, True]:
         with pytest.raises(TypeError, match=f"multi_id must be an int, not {type(wrong).__name__}"):
             log.table("vehicle_attitude", wrong)
+    # numpy's integers are ints here, as they are to Python's own indexing.
+    assert log.table("vehicle_attitude", np.uint8(0)).num_rows == log.table("vehicle_attitude").num_rows
     with pytest.raises(ValueError, match=r"columns named more than once: \['q\[0\]'\]"):
         log.table("vehicle_attitude", columns=["q[0]", "timestamp", "q[0]"])
     assert log.table("vehicle_attitude", columns=["q[1]", "q[0]"]).column_names == ["q[1]", "q[0]"]

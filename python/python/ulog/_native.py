@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import operator
 import os
 import warnings
 from typing import Any, BinaryIO, Dict, List, Optional, Sequence, Union
@@ -212,8 +213,7 @@ class Log:
             repeated = sorted({c for c in columns if columns.count(c) > 1})
             if repeated:
                 raise ValueError(f"columns named more than once: {repeated}")
-        if isinstance(multi_id, bool) or not isinstance(multi_id, int):
-            raise TypeError(f"multi_id must be an int, not {type(multi_id).__name__}")
+        multi_id = _count("multi_id", multi_id)
         if not 0 <= multi_id <= 255:
             # Beyond what an instance number can be: the log's instances of the topic, as
             # for any instance it lacks (or the native error if it lacks the topic).
@@ -236,6 +236,17 @@ class Log:
 
     def __repr__(self) -> str:
         return repr(self._native)
+
+
+def _count(name: str, value: Any) -> int:
+    """``value`` as an int (numpy's integers too, as ``operator.index`` takes them; not a
+    bool), else a TypeError naming the argument."""
+    if isinstance(value, bool):
+        raise TypeError(f"{name} must be an int, not bool")
+    try:
+        return operator.index(value)
+    except TypeError:
+        raise TypeError(f"{name} must be an int, not {type(value).__name__}") from None
 
 
 def open(  # noqa: A001
@@ -292,20 +303,27 @@ def to_parquet(
     (in the window). Before any log is converted, as ``ulog parquet -m``: KeyError for a
     topic of ``topics`` that no log defines (naming the closest topics the logs have);
     ValueError for a bound that is NaN, infinite or beyond any log time, an ``end`` at or
-    before ``start``, an empty ``topics`` or a ``threads`` below 1."""
+    before ``start``, an empty ``topics`` or a ``threads`` below 1 (TypeError for one that
+    is not an integer)."""
     if isinstance(paths, (str, os.PathLike)):
         paths = [paths]
     if isinstance(topics, str):
         topics = [topics]
-    if topics is not None and len(topics) == 0:
-        raise ValueError("topics=[] names no topic; topics=None converts every topic")
-    if threads is not None and (isinstance(threads, bool) or not isinstance(threads, int) or threads < 1):
-        raise ValueError(f"threads is how many logs are converted at once, 1 or more (None: one per core), not {threads!r}")
+    if topics is not None:
+        topics = list(topics)
+        if not topics:
+            raise ValueError("topics=[] names no topic; topics=None converts every topic")
+    if threads is not None:
+        threads = _count("threads", threads)
+        if threads < 1:
+            raise ValueError(
+                f"threads is how many logs are converted at once: 1 or more (None: one per core), not {threads}"
+            )
     results = _ulog.to_parquet(
         [os.fspath(p) for p in paths],
         os.fspath(out_dir),
         layout,
-        list(topics) if topics is not None else None,
+        topics,
         threads,
         analysis,
         start,
