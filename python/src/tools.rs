@@ -53,18 +53,15 @@ pub(crate) fn to_parquet<'py>(
     // As `ulog parquet -m`: a topic no log defines fails before any log is converted; one
     // that some logs lack is said of each of them.
     let check = py.detach(|| ulog_runtime::read::check_topics(&paths, &wanted));
-    if let Some(missing) = check.missing.iter().find(|m| m.in_none) {
-        let hint = match missing.suggestions.as_slice() {
-            [] => " (no topic the logs define has a close name)".to_owned(),
-            names => ulog_runtime::schema::did_you_mean(names),
+    if let Some((missing, text)) = check.refusal(paths.len()) {
+        let hint = if missing.suggestions.is_empty() {
+            " (no topic the logs define has a close name)"
+        } else {
+            ""
         };
-        let topic = &missing.topic;
         let message = match paths.as_slice() {
-            [path] => format!("{}: no topic `{topic}` in this log{hint}", path.display()),
-            _ if !check.unreadable.is_empty() => {
-                format!("no topic `{topic}` in any of the logs that can be read{hint}")
-            }
-            _ => format!("no topic `{topic}` in any of the logs{hint}"),
+            [path] => format!("{}: {text}{hint}", path.display()),
+            _ => format!("{text}{hint}"),
         };
         return Err(pyo3::exceptions::PyKeyError::new_err(message));
     }

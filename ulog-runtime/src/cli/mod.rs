@@ -261,8 +261,10 @@ pub(crate) fn check_path(path: &Path, folder: bool) -> Result<(), Failure> {
     match std::fs::metadata(path) {
         Err(e) => Err(Failure::at(path, plain_io(&e, folder))),
         Ok(m) if folder && !m.is_dir() => Err(Failure::at(path, "is not a folder")),
-        Ok(m) if !folder && m.is_dir() => Err(Failure::at(path, "is a folder, not a log file")),
-        Ok(m) if !folder && !m.is_file() => Err(Failure::at(path, "is not a regular file")),
+        Ok(m) if !folder => match crate::read::not_a_log_file(&m) {
+            Some(e) => Err(Failure::at(path, e)),
+            None => Ok(()),
+        },
         Ok(_) => Ok(()),
     }
 }
@@ -328,18 +330,10 @@ pub(crate) fn check_topics(log: &Log<'_>, path: &Path, topics: &[String]) -> Res
 /// Logs that cannot be read are left to the conversion to report.
 pub(crate) fn check_topics_in_files(files: &[PathBuf], topics: &[String]) -> Result<(), Failure> {
     let check = crate::read::check_topics(files, topics);
+    // Each topic in order: the logs lacking one said until a topic no log defines.
     for missing in &check.missing {
         if missing.in_none {
-            let hint = did_you_mean(&missing.suggestions);
-            let topic = &missing.topic;
-            return Err(match files {
-                [path] => Failure::at(path, format!("no topic `{topic}` in this log{hint}")),
-                _ if !check.unreadable.is_empty() => Failure::exit(
-                    1,
-                    format!("no topic `{topic}` in any of the logs that can be read{hint}"),
-                ),
-                _ => Failure::exit(1, format!("no topic `{topic}` in any of the logs{hint}")),
-            });
+            break;
         }
         for path in &missing.lacking {
             eprintln!(
@@ -349,7 +343,21 @@ pub(crate) fn check_topics_in_files(files: &[PathBuf], topics: &[String]) -> Res
             );
         }
     }
-    Ok(())
+    match check.refusal(files.len()) {
+        None => Ok(()),
+        Some((missing, text)) => {
+            // No close name: where to see the topics.
+            let text = if missing.suggestions.is_empty() {
+                format!("{text}{}", did_you_mean(&[]))
+            } else {
+                text
+            };
+            Err(match files {
+                [path] => Failure::at(path, text),
+                _ => Failure::exit(1, text),
+            })
+        }
+    }
 }
 
 /// `; did you mean `a` or `b`?`, or where to see the topics when no name is close.

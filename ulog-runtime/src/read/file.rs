@@ -18,20 +18,28 @@ use std::path::Path;
 /// ```
 pub fn open_file(path: impl AsRef<Path>) -> io::Result<File> {
     let path = path.as_ref();
-    let kind = std::fs::metadata(path)?;
+    match not_a_log_file(&std::fs::metadata(path)?) {
+        Some(e) => Err(e),
+        None => File::open(path),
+    }
+}
+
+/// Why a file of this kind cannot be a log ([`open_file`]'s refusals), or `None` for a
+/// regular file.
+pub(crate) fn not_a_log_file(kind: &std::fs::Metadata) -> Option<io::Error> {
     if kind.is_dir() {
-        return Err(io::Error::new(
+        Some(io::Error::new(
             io::ErrorKind::IsADirectory,
             "is a folder, not a log file",
-        ));
-    }
-    if !kind.is_file() {
-        return Err(io::Error::new(
+        ))
+    } else if !kind.is_file() {
+        Some(io::Error::new(
             io::ErrorKind::InvalidInput,
             "is not a regular file",
-        ));
+        ))
+    } else {
+        None
     }
-    File::open(path)
 }
 
 #[cfg(test)]

@@ -14,6 +14,8 @@ mod stream;
 mod threads;
 mod topics;
 
+#[cfg(feature = "cli")]
+pub(crate) use file::not_a_log_file;
 pub use file::open_file;
 pub use gps_clock::GpsClock;
 pub use log::{DataRows, Log, Rows, Summary, fold_rows, fold_rows_on, summarize};

@@ -31,6 +31,26 @@ pub struct MissingTopic {
     pub suggestions: Vec<String>,
 }
 
+impl TopicCheck {
+    /// The first topic asked for that no file defines, as the text of the error a
+    /// conversion of `files` files stops on: "no topic `x` in this log" (one file), "… in
+    /// any of the logs" or "… in any of the logs that can be read", then "; did you mean
+    /// …?" when a name is close; `None` if every topic is defined somewhere. The caller
+    /// names the file of a single one, and says where to look when no name is close
+    /// ([`MissingTopic::suggestions`] empty).
+    pub fn refusal(&self, files: usize) -> Option<(&MissingTopic, String)> {
+        let missing = self.missing.iter().find(|m| m.in_none)?;
+        let topic = &missing.topic;
+        let place = match files {
+            1 => "this log",
+            _ if !self.unreadable.is_empty() => "any of the logs that can be read",
+            _ => "any of the logs",
+        };
+        let hint = crate::schema::did_you_mean(&missing.suggestions);
+        Some((missing, format!("no topic `{topic}` in {place}{hint}")))
+    }
+}
+
 /// Which of `files` define each of `topics` (a `-m` list, pyulog's
 /// `message_name_filter_list`), from each file's definitions section only, before a
 /// conversion reads them whole: a topic no file defines is most likely misspelled (with the
@@ -48,6 +68,8 @@ pub struct MissingTopic {
 /// # std::fs::remove_file(&path)?;
 /// assert!(check.missing[0].in_none);
 /// assert_eq!(check.missing[0].suggestions, ["battery"]);
+/// let (_, text) = check.refusal(1).unwrap();
+/// assert_eq!(text, "no topic `batery` in this log; did you mean `battery`?");
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn check_topics(files: &[impl AsRef<Path>], topics: &[String]) -> TopicCheck {
