@@ -8,7 +8,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyList, PyString, PyTuple};
 use ulog_runtime::compat::pyulog::{self, NameFilter, PyulogError, PyulogFile, PyulogOptions};
 
-use crate::errors::{NotAULogError, UnsupportedFlagError, io_error};
+use crate::errors::{NotAULogError, UnsupportedFlagError, read_error};
 use crate::values::py_value;
 
 /// Reads `source` (a path, or the file's bytes from its current position `base_offset`)
@@ -45,12 +45,11 @@ pub(crate) fn read_pyulog<'py>(
         }
         f
     };
-    let read = if let Ok(path) = source.cast::<PyString>() {
-        let path = path.to_string();
+    let path = source.cast::<PyString>().ok().map(|p| p.to_string());
+    let read = if let Some(path) = &path {
         py.detach(|| {
             trimmed(|| {
-                let file = ulog_runtime::read::MappedFile::open(&path)
-                    .map_err(|e| Err(format!("{path}: {e}")))?;
+                let file = ulog_runtime::read::MappedFile::open(path).map_err(Err)?;
                 let f = pyulog::read_mapped(&file, &options).map_err(Ok)?;
                 Ok(recovered(&file, f))
             })
@@ -61,7 +60,7 @@ pub(crate) fn read_pyulog<'py>(
     };
     match read {
         Ok(f) => to_dict(py, f),
-        Err(Err(io)) => Err(io_error(io, None, None)),
+        Err(Err(e)) => Err(read_error(path.as_deref().unwrap_or_default(), &e)),
         Err(Ok(e)) => Err(raise(py, e)),
     }
 }

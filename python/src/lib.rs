@@ -22,6 +22,7 @@ fn _ulog(m: &Bound<'_, PyModule>) -> PyResult<()> {
         py.get_type::<errors::UnsupportedFlagError>(),
     )?;
     m.add("ULogIOError", errors::io_error_type(py)?)?;
+    errors::add_to(m)?;
     m.add_function(wrap_pyfunction!(compat::read_pyulog, m)?)?;
     m.add_class::<log::Log>()?;
     m.add_class::<log::Table>()?;

@@ -2,11 +2,13 @@
 copy) equal to pyulog's columns, the log's metadata, Parquet, the command-line tool, and
 threads reading at once."""
 
+import copy
 import errno
 import inspect
 import io
 import json
 import os
+import pickle
 import struct
 import subprocess
 import sys
@@ -420,19 +422,33 @@ def test_misused_arguments_are_clear_errors(tmp_path):
     # A path that is not a regular file: refused by name, as the CLI does, not mapped.
     with pytest.raises(ulog.ULogIOError, match="is not a regular file"):
         ulog.open("/dev/null")
-    with pytest.raises(ulog.ULogIOError, match="is a folder, not a log file"):
+    # A folder is an IsADirectoryError too (errno EISDIR), as Python's own open() says.
+    with pytest.raises(IsADirectoryError, match="is a folder, not a log file") as raised:
         ulog.open(tmp_path)
+    assert isinstance(raised.value, ulog.ULogIOError) and raised.value.errno == errno.EISDIR
     pipe = tmp_path / "pipe.ulg"
     os.mkfifo(pipe)
     with pytest.raises(ulog.ULogIOError, match="is not a regular file"):
         ulog.open(pipe)  # refused, not waited on for a writer
-    # An I/O error is an OSError too, with its errno and file name.
+    # An I/O error is an OSError too, with its errno and file name, and of the OSError
+    # subclass of its errno, as Python's own are: `except FileNotFoundError` catches it.
     missing = tmp_path / "missing.ulg"
-    with pytest.raises(OSError) as raised:
+    with pytest.raises(FileNotFoundError) as raised:
         ulog.open(missing)
     assert isinstance(raised.value, ulog.ULogError) and isinstance(raised.value, ulog.ULogIOError)
     assert raised.value.errno == errno.ENOENT and raised.value.filename == str(missing)
     assert str(raised.value) == f"{missing}: I/O error: No such file or directory (os error 2)"
+    assert not isinstance(raised.value, PermissionError)
+    # What pickle and copy give back is the same error: type, message, errno, file name.
+    for again in (pickle.loads(pickle.dumps(raised.value)), copy.copy(raised.value)):
+        assert type(again) is type(raised.value)
+        assert (str(again), again.errno, again.filename) == (str(raised.value), errno.ENOENT, str(missing))
+    # Without an errno, a ULogIOError of no OSError subclass, pickled whole as well.
+    with pytest.raises(ulog.ULogIOError) as raised:
+        ulog.open("/dev/null")
+    assert type(raised.value) is ulog.ULogIOError and raised.value.errno is None
+    again = pickle.loads(pickle.dumps(raised.value))
+    assert (type(again), str(again), again.filename) == (ulog.ULogIOError, str(raised.value), "/dev/null")
     assert "(70 topic instances, 14604 rows)" in repr(log)
     one = corpus_dir() / "yule_log" / "short_list.ulg"
     assert repr(ulog.open(one)).endswith("(1 topic instance, 10 rows)>")
