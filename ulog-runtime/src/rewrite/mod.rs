@@ -262,8 +262,10 @@ pub struct Report {
     pub logged: (usize, usize),
     /// Logged strings whose text was changed (anonymized).
     pub logged_changed: usize,
-    /// Parameter changes written, moved into the initial parameters (before the window),
-    /// and left out (after it).
+    /// Parameter changes written, moved into the initial parameters (before the window, or
+    /// before any message of the output's data section: a subscription, row, logged string
+    /// or dropout, which the reader takes a `P` message after to be a change), and left out
+    /// (after the window).
     pub parameter_changes: (usize, usize, usize),
     /// Dropouts and syncs left out (outside the window).
     pub dropouts_and_syncs_dropped: usize,
@@ -278,6 +280,9 @@ struct Output<W: Write> {
     out: io::BufWriter<W>,
     buf: Vec<u8>,
     bytes: u64,
+    /// Whether a message of the data section has been written: a parameter message reads
+    /// as a change only after one.
+    in_data: bool,
 }
 
 impl<W: Write> Output<W> {
@@ -291,14 +296,26 @@ impl<W: Write> Output<W> {
         let mut header = [0u8; 3];
         header[..2].copy_from_slice(&size.to_le_bytes());
         header[2] = ty;
+        self.entered(ty);
         self.write(&header)?;
         self.write(payload)
+    }
+
+    /// Notes a message of type `ty` written: the messages the reader starts the data
+    /// section at.
+    fn entered(&mut self, ty: u8) {
+        self.in_data |= matches!(ty, b'A' | b'R' | b'D' | b'L' | b'C' | b'O');
     }
 
     fn message(&mut self, m: &Message<'_>) -> Result<(), RewriteError> {
         self.buf.clear();
         m.encode(&mut self.buf)?;
-        let Output { out, buf, bytes } = self;
+        if let Some(&ty) = self.buf.get(2) {
+            self.entered(ty);
+        }
+        let Output {
+            out, buf, bytes, ..
+        } = self;
         out.write_all(buf).map_err(RewriteError::Write)?;
         *bytes += buf.len() as u64;
         Ok(())
@@ -315,6 +332,7 @@ impl<W: Write> Output<W> {
         header[..2].copy_from_slice(&size.to_le_bytes());
         header[2] = b'D';
         header[3..].copy_from_slice(&msg_id.to_le_bytes());
+        self.in_data = true;
         self.write(&header)?;
         self.write(data)
     }
@@ -521,6 +539,7 @@ impl Rewrite {
                 out: io::BufWriter::with_capacity(256 << 10, output),
                 buf: Vec::with_capacity(256),
                 bytes: 0,
+                in_data: false,
             },
             report: Report::default(),
             held: Vec::new(),
@@ -1061,6 +1080,13 @@ impl<W: Write> Pass<'_, W> {
                     self.report.logged_changed += 1;
                     return self.out.raw(ty, &changed);
                 }
+            }
+            // Before the output's data section, a parameter message is an initial
+            // parameter to a reader (the input's data section began with something not
+            // written, such as rows of no subscription): said so.
+            Timed::Change(_) if !self.out.in_data => {
+                self.report.parameter_changes.1 += 1;
+                return self.parameter(ty, payload);
             }
             Timed::Change(_) => {
                 self.report.parameter_changes.0 += 1;

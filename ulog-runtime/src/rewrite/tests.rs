@@ -859,6 +859,75 @@ fn a_format_and_an_info_kept_despite_a_note_are_written() {
     assert_eq!(rewrite(Rewrite::new(), &out).0, out);
 }
 
+#[test]
+fn a_change_before_the_outputs_data_section_is_said_to_be_moved_into_the_initial_parameters() {
+    // A fuzzer's find: the input's data section began with a row of no subscription (not
+    // written), so a parameter change after it came out among the definitions, where a
+    // reader takes it for an initial parameter, and the report said it was written as a
+    // change.
+    use crate::read::KeyValue;
+    let mut bytes = hand_built(&[b"t:uint64_t timestamp;float x;"]);
+    let msg = |m: Message<'_>, b: &mut Vec<u8>| m.encode(b).unwrap();
+    let param = |v: i32, b: &mut Vec<u8>| {
+        msg(
+            Message::Parameter(KeyValue {
+                key: b"int32_t SYS_X",
+                value: &v.to_le_bytes(),
+            }),
+            b,
+        );
+    };
+    param(1, &mut bytes);
+    let mut row = 7u64.to_le_bytes().to_vec();
+    row.extend_from_slice(&1.5f32.to_le_bytes());
+    msg(
+        Message::Data {
+            msg_id: 9,
+            data: &row,
+        },
+        &mut bytes,
+    );
+    param(2, &mut bytes);
+    msg(
+        Message::Subscribe {
+            multi_id: 0,
+            msg_id: 0,
+            name: b"t",
+        },
+        &mut bytes,
+    );
+    param(3, &mut bytes);
+    msg(
+        Message::Data {
+            msg_id: 0,
+            data: &row,
+        },
+        &mut bytes,
+    );
+    let input = Log::from_slice(&bytes).unwrap();
+    let changes = |log: &Log<'_>| -> Vec<(String, ParamValue)> {
+        log.parameter_changes()
+            .iter()
+            .map(|c| (c.name.clone(), c.value))
+            .collect()
+    };
+    let initial = |log: &Log<'_>| log.metadata().initial_parameters()[0].value;
+    assert_eq!(initial(&input), ParamValue::Int32(1));
+    assert_eq!(changes(&input).len(), 2, "the input has two changes");
+    let (out, report) = rewrite(Rewrite::new(), &bytes);
+    let back = Log::from_slice(&out).unwrap();
+    // The first change comes out as the initial value, the second still a change.
+    assert_eq!(initial(&back), ParamValue::Int32(2));
+    assert_eq!(changes(&back), [("SYS_X".to_owned(), ParamValue::Int32(3))]);
+    assert_eq!(report.parameter_changes, (1, 1, 0));
+    assert!(
+        report.to_string().contains(
+            "parameter changes: 1 written, 1 moved into the initial parameters, 0 left out"
+        ),
+        "{report}"
+    );
+}
+
 fn hand_built(formats: &[&[u8]]) -> Vec<u8> {
     let mut bytes = crate::read::FileHeader {
         version: 1,

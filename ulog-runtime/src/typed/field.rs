@@ -140,7 +140,7 @@ pub trait Element: Sized {
 #[diagnostic::on_unimplemented(
     message = "`{Self}` cannot be a ULog field",
     label = "not a ULog field type",
-    note = "ULog fields are u8, i8, u16, i16, u32, i32, u64, i64, f32, f64, bool, `Char` (one char byte), `Chars<N>` (char[N] text), arrays `[T; N]` of those, structs deriving `ULog` and arrays of them, or `Option` of any of these (a field the file may lack); arrays of arrays (multi-dimensional) do not exist in ULog: flatten them to one `[T; N]`"
+    note = "ULog fields are u8, i8, u16, i16, u32, i32, u64, i64, f32, f64, bool, `Char` (one char byte), `Chars<N>` (char[N] text), arrays `[T; N]` of those, structs deriving `ULog` and arrays of them, or `Option` of any of these but `Option` (a field the file may lack); arrays of arrays (multi-dimensional) do not exist in ULog: flatten them to one `[T; N]`"
 )]
 pub trait FieldValue: Sized {
     /// The ULog element type.
@@ -341,10 +341,25 @@ impl<const N: usize> FieldValue for Chars<N> {
     }
 }
 
+/// A field type an `Option` field may hold: every [`FieldValue`] but an `Option` itself.
+/// `Option<Option<T>>` has no form in a file (a field is there or not), so it does not
+/// compile (`cannot be a ULog field`): its inner `None` would be written as zeros and read
+/// back as `Some(Some(0))`.
+pub trait RequiredField: FieldValue {}
+
+#[diagnostic::do_not_recommend]
+impl<E: Element> RequiredField for E {}
+
+#[diagnostic::do_not_recommend]
+impl<E: Element, const N: usize> RequiredField for [E; N] {}
+
+#[diagnostic::do_not_recommend]
+impl<const N: usize> RequiredField for Chars<N> {}
+
 /// A field a file may lack: `None` when the file's format has no field of that name.
 /// Writing `None` writes zeros.
 #[diagnostic::do_not_recommend]
-impl<F: FieldValue> FieldValue for Option<F> {
+impl<F: RequiredField> FieldValue for Option<F> {
     const KIND: TypedKind = F::KIND;
     const ARRAY_LEN: Option<u16> = F::ARRAY_LEN;
     const OPTIONAL: bool = true;

@@ -43,7 +43,7 @@
 //! | [`Chars<N>`] | `char[N]`, text without terminator when it fills the array |
 //! | `[T; N]` of the above (not `Chars`) or of a nested type | `type[N]` |
 //! | a struct deriving `ULog` | the nested format (its own name) |
-//! | `Option<T>` of any of these | the same type; absent from a file → `None`, written as zeros |
+//! | `Option<T>` of any of these (not of an `Option`: [`RequiredField`]) | the same type; absent from a file → `None`, written as zeros |
 //!
 //! Anything else (`String`, `Vec`, `usize`, `char`, references, arrays of arrays) does not
 //! compile: [`FieldValue`] and [`Element`] are implemented for exactly these types, and the
@@ -99,7 +99,9 @@ mod view;
 mod widen;
 
 pub use check::{DecodePlan, FieldPlan, Mismatch, MismatchKind, TypedDecoder, TypedError};
-pub use field::{Char, Chars, CharsTooLong, DerivedElement, Element, FieldValue, Padding};
+pub use field::{
+    Char, Chars, CharsTooLong, DerivedElement, Element, FieldValue, Padding, RequiredField,
+};
 pub use view::{TopicRows, TypedRows, TypedTopic};
 pub use widen::{common_type, widens};
 
