@@ -204,13 +204,14 @@ fn info(log: &Log<'_>, file: &Path, verbose: bool, out: &mut impl Write) -> Resu
     } else {
         writeln!(
             out,
-            "Damage:     {} problem{}, {skipped} bytes skipped{}",
+            "Damage:     {} problem{}, {skipped} byte{} skipped{}",
             log.diagnostics().len(),
             if log.diagnostics().len() == 1 {
                 ""
             } else {
                 "s"
             },
+            if skipped == 1 { "" } else { "s" },
             if verbose { ":" } else { " (-v lists them)" }
         )?;
         if verbose {

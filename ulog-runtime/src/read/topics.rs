@@ -250,8 +250,9 @@ impl Skipped {
         let mut out = Vec::new();
         if self.damaged_bytes > 0 {
             out.push(format!(
-                "{} damaged bytes skipped (`ulog info -v` lists where)",
-                self.damaged_bytes
+                "{} damaged byte{} skipped (`ulog info -v` lists where)",
+                self.damaged_bytes,
+                if self.damaged_bytes == 1 { "" } else { "s" }
             ));
         }
         for offset in &self.ignored_appended_offsets {
@@ -449,5 +450,30 @@ impl<'a> Iterator for InstanceRows<'a> {
             InstanceRows::One(rows) => rows.size_hint(),
             InstanceRows::Merged(_, offsets) => offsets.size_hint(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Skipped;
+
+    #[test]
+    fn damage_lines_count_bytes_in_the_singular_and_the_plural() {
+        let line = |damaged_bytes| {
+            Skipped {
+                damaged_bytes,
+                ..Skipped::default()
+            }
+            .damage_lines()
+        };
+        assert_eq!(
+            line(1),
+            ["1 damaged byte skipped (`ulog info -v` lists where)"]
+        );
+        assert_eq!(
+            line(2),
+            ["2 damaged bytes skipped (`ulog info -v` lists where)"]
+        );
+        assert!(line(0).is_empty());
     }
 }
