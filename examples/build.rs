@@ -5,7 +5,8 @@
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     ulog_runtime::codegen::Builder::new()
         .toml("topics.toml")
-        .format("vehicle_attitude:uint64_t timestamp;float[4] q;float[3] delta_q_reset;uint8_t quat_reset_counter;uint8_t[3] _padding0;")
+        // PX4's `vehicle_attitude` as `pyulog/sample_log_small.ulg` defines it.
+        .format("vehicle_attitude:uint64_t timestamp;float[4] q;float[4] delta_q_reset;uint8_t quat_reset_counter;uint8_t[7] _padding0;")
         .derive("Copy")
         .generate("topics.rs")?;
     ulog_runtime::codegen::Builder::new()

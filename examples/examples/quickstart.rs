@@ -60,9 +60,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             &VehicleAttitude {
                 timestamp: t + 10,
                 q: [(yaw / 2.0).cos(), 0.0, 0.0, (yaw / 2.0).sin()],
-                delta_q_reset: [0.0; 3],
+                delta_q_reset: [0.0; 4],
                 quat_reset_counter: 0,
-                _padding0: [0; 3],
+                _padding0: [0; 7],
             },
         )?;
         w.write(

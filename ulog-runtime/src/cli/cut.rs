@@ -63,7 +63,15 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         .filter(|t| t.kept)
         .fold((0, 0), |(a, b), t| (a + t.rows_in, b + t.rows_out));
     if window.is_bounded() && rows_in > 0 && rows_out == 0 {
-        crate::cli::report_empty_window(&args.file, &window, None);
+        // Where the rows of the topics kept lie (as `ulog csv` says it).
+        let spans = report
+            .topics
+            .iter()
+            .filter(|t| t.kept)
+            .filter_map(|t| t.span_in);
+        let first = spans.clone().map(|(a, _)| a).min();
+        let last = spans.map(|(_, b)| b).max();
+        crate::cli::report_empty_window(&args.file, &window, first.zip(last));
     }
     crate::cli::report_rewrite(&report, &args.output, out)
 }

@@ -229,6 +229,8 @@ pub struct TopicReport {
     pub multi_id: u8,
     /// Rows read.
     pub rows_in: usize,
+    /// The smallest and the largest timestamp of the rows read (µs), when any was.
+    pub span_in: Option<(u64, u64)>,
     /// Rows written.
     pub rows_out: usize,
     /// Rows written changed by a transform (anonymized rows included).
@@ -979,6 +981,12 @@ impl<W: Write> Pass<'_, W> {
         let (kept, topic) = (state.kept, state.topic);
         let inst = &mut self.instances[topic];
         inst.report.rows_in += 1;
+        let t = row.timestamp;
+        inst.report.span_in = Some(
+            inst.report
+                .span_in
+                .map_or((t, t), |(a, b)| (a.min(t), b.max(t))),
+        );
         if !kept {
             return Ok(());
         }

@@ -169,6 +169,19 @@ fn a_window_keeps_its_rows_strings_and_changes_and_the_parameters_in_force() {
         Rewrite::new().window(Window::seconds(Some(3.0), Some(6.0)).unwrap()),
         &input,
     );
+    // Each instance's span of rows read is the input's (what `ulog cut` says of a window
+    // no row lies in).
+    let whole = Log::from_slice(&input).unwrap();
+    for t in &report.topics {
+        let times: Vec<u64> = whole
+            .data()
+            .filter(|r| r.subscription.name == t.name && r.subscription.multi_id == t.multi_id)
+            .map(|r| r.timestamp)
+            .collect();
+        let span = times.iter().min().copied().zip(times.iter().max().copied());
+        assert!(span.is_some());
+        assert_eq!(t.span_in, span, "{}", t.name);
+    }
     let log = Log::from_vec(out).unwrap();
     assert!(log.diagnostics().is_empty(), "{:?}", log.diagnostics());
     let times = |topic: &str| -> Vec<u64> {
