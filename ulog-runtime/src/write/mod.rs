@@ -80,6 +80,20 @@ pub enum WriteError {
          string: subscribe a topic or log a string first (readers skip it before one)"
     )]
     NoDataSection(&'static str),
+    /// A second subscription of a topic instance already subscribed (and not unsubscribed):
+    /// readers would not know which rows are the instance's.
+    #[error(
+        "`{topic}` instance {multi_id} is already subscribed (msg_id {msg_id}); write its rows \
+         through that subscription, or give this one another multi_id"
+    )]
+    AlreadySubscribed {
+        /// The topic.
+        topic: String,
+        /// The instance.
+        multi_id: u8,
+        /// The subscription it has.
+        msg_id: u16,
+    },
     /// All 65,536 `msg_id`s are used.
     #[error("all 65536 msg_ids are used")]
     TooManySubscriptions,
@@ -189,6 +203,9 @@ pub struct Writer<W: Write> {
     out: Option<W>,
     schema: Schema,
     subscriptions: Vec<Option<Subscribed>>,
+    /// The topic instances subscribed by this writer and not unsubscribed, and their
+    /// `msg_id`s: a second subscription of one is refused.
+    active: std::collections::HashMap<(String, u8), u16>,
     next_msg_id: u32,
     default_parameters: bool,
     /// Whether the data section has begun (the file has an `A`, `L` or `C`, or a row):
@@ -207,6 +224,7 @@ impl<W: Write> Writer<W> {
             out: Some(out),
             schema: Schema::new(),
             subscriptions: Vec::new(),
+            active: std::collections::HashMap::new(),
             next_msg_id: 0,
             default_parameters: options.default_parameters,
             data_section: false,
@@ -391,7 +409,9 @@ impl<W: Write> Writer<W> {
     /// Subscribes a written format (`A`) as instance `multi_id`; the format and the formats it
     /// nests must have been written. `msg_id`s are given in increasing order from 0. While
     /// the definitions are open the subscription waits, and goes out when the data begins
-    /// (see [`Writer`]).
+    /// (see [`Writer`]). A topic instance already subscribed, and not unsubscribed, is
+    /// refused ([`WriteError::AlreadySubscribed`]): pyulog would read its rows as two
+    /// datasets of one name and `multi_id`.
     pub fn subscribe(&mut self, format: &str, multi_id: u8) -> Result<SubscriptionId, WriteError> {
         let id = self
             .schema
@@ -402,6 +422,13 @@ impl<W: Write> Writer<W> {
             error,
         })?;
         let (min, max) = (layout.payload_size, layout.size);
+        if let Some(&msg_id) = self.active.get(&(format.to_owned(), multi_id)) {
+            return Err(WriteError::AlreadySubscribed {
+                topic: format.to_owned(),
+                multi_id,
+                msg_id,
+            });
+        }
         let msg_id =
             u16::try_from(self.next_msg_id).map_err(|_| WriteError::TooManySubscriptions)?;
         if self.data_section {
@@ -414,6 +441,7 @@ impl<W: Write> Writer<W> {
             self.pending.push((SubscriptionId(msg_id), multi_id));
         }
         self.next_msg_id += 1;
+        self.active.insert((format.to_owned(), multi_id), msg_id);
         self.subscriptions.push(Some(Subscribed {
             topic: format.to_owned(),
             min,
@@ -516,11 +544,14 @@ impl<W: Write> Writer<W> {
         result
     }
 
-    /// Marks a subscription as no longer logged (`R`).
+    /// Marks a subscription as no longer logged (`R`); its topic instance can be subscribed
+    /// again.
     pub fn unsubscribe(&mut self, id: SubscriptionId) -> Result<(), WriteError> {
         self.subscription(id)?;
         self.begin_data()?;
-        self.put(Message::Unsubscribe { msg_id: id.0 })
+        self.put(Message::Unsubscribe { msg_id: id.0 })?;
+        self.active.retain(|_, msg_id| *msg_id != id.0);
+        Ok(())
     }
 
     fn subscription(&self, id: SubscriptionId) -> Result<&Subscribed, WriteError> {
@@ -728,7 +759,8 @@ impl Writer<io::BufWriter<std::fs::File>> {
 impl Writer<std::fs::File> {
     /// Opens an existing version-1 log to append data to it: sets the DATA_APPENDED flag and
     /// the next free appended offset (the current end of the file), then continues with the
-    /// file's formats and subscriptions (new ones get the next `msg_id`s).
+    /// file's formats and subscriptions (new ones get the next `msg_id`s; an instance the
+    /// file has is continued by subscribing it again, its rows read as one instance).
     pub fn append(path: impl AsRef<std::path::Path>) -> Result<Writer<std::fs::File>, WriteError> {
         use std::io::{Read, Seek, SeekFrom};
         let mut file = std::fs::OpenOptions::new()
@@ -773,6 +805,9 @@ impl Writer<std::fs::File> {
             out: Some(file),
             schema,
             subscriptions,
+            // The file's own subscriptions are not counted: an instance it has is continued
+            // by subscribing it again (its rows read as one instance).
+            active: std::collections::HashMap::new(),
             next_msg_id,
             default_parameters: bits.has_default_parameters(),
             data_section: true,

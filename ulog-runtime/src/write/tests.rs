@@ -195,6 +195,42 @@ fn misuse_is_refused_and_writes_nothing() {
 }
 
 #[test]
+fn an_instance_is_subscribed_once_until_it_is_unsubscribed() {
+    let mut w = new_writer(false);
+    esc_formats(&mut w);
+    let first = w.subscribe("esc_status", 0).unwrap();
+    let other = w.subscribe("esc_status", 1).unwrap();
+    let e = w.subscribe("esc_status", 0).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "`esc_status` instance 0 is already subscribed (msg_id 0); write its rows through that \
+         subscription, or give this one another multi_id"
+    );
+    w.data(first, &esc_row(1, 100)).unwrap();
+    w.data(other, &esc_row(2, 200)).unwrap();
+    w.unsubscribe(first).unwrap();
+    let again = w.subscribe("esc_status", 0).unwrap();
+    assert_ne!(again, first);
+    w.data(again, &esc_row(3, 300)).unwrap();
+    // Read back: instance 0 has its rows of both subscriptions, instance 1 its own, and
+    // refusing wrote nothing a reader stumbles on.
+    let log = Log::from_slice(w.get_ref()).unwrap();
+    assert_eq!(log.diagnostics(), &[]);
+    let instances = log.instances(&["esc_status".to_owned()]);
+    let rows = |multi_id| {
+        let subs = instances
+            .iter()
+            .find(|g| g[0].multi_id == multi_id)
+            .unwrap();
+        log.instance_rows(subs)
+            .map(|r| r.timestamp)
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(rows(0), [1, 3]);
+    assert_eq!(rows(1), [2]);
+}
+
+#[test]
 fn a_file_cut_anywhere_reads_up_to_its_last_complete_message() {
     let mut w = new_writer(false);
     esc_formats(&mut w);
