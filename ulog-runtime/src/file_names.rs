@@ -14,8 +14,67 @@
 //! [`FileNames`] makes the names of one folder unique, comparing them without regard to
 //! case (as macOS and Windows do): a second name that maps to a taken file name gets `~2`
 //! (then `~3`...) before its extension, and the caller is told, to report it.
+//!
+//! Where an export goes, checked the same way by every verb and by the library's writers
+//! before anything is written: [`prepare_file`] for one output file (`ulog cut`, `kml`,
+//! `report`), [`prepare_folder`] for a folder of them (`ulog csv`, Parquet).
 
 use std::collections::HashMap;
+use std::io;
+use std::path::Path;
+
+/// Makes ready to write the file `path`: a folder there is refused (kind `IsADirectory`:
+/// "a folder; the output is a file (give its path)"), and so is a parent that is not a
+/// folder (kind `NotADirectory`); missing parent folders are made.
+///
+/// ```
+/// let e = ulog_runtime::file_names::prepare_file(&std::env::temp_dir()).unwrap_err();
+/// assert_eq!(e.to_string(), "a folder; the output is a file (give its path)");
+/// ```
+pub fn prepare_file(path: &Path) -> io::Result<()> {
+    if path.is_dir() {
+        return Err(io::Error::new(
+            io::ErrorKind::IsADirectory,
+            "a folder; the output is a file (give its path)",
+        ));
+    }
+    match path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        Some(folder) => prepare_parent(folder),
+        None => Ok(()),
+    }
+}
+
+/// Makes ready the output folder `path` (made with its parents if missing): a file there
+/// is refused (kind `NotADirectory`: "a file; the output is a folder (give a folder's
+/// path)"), and so is a file among its parents.
+///
+/// ```
+/// let log = std::env::temp_dir().join("prepare_folder_doc.ulg");
+/// std::fs::write(&log, b"")?;
+/// let e = ulog_runtime::file_names::prepare_folder(&log).unwrap_err();
+/// assert_eq!(e.to_string(), "a file; the output is a folder (give a folder's path)");
+/// # Ok::<(), std::io::Error>(())
+/// ```
+pub fn prepare_folder(path: &Path) -> io::Result<()> {
+    if path.exists() && !path.is_dir() {
+        return Err(io::Error::new(
+            io::ErrorKind::NotADirectory,
+            "a file; the output is a folder (give a folder's path)",
+        ));
+    }
+    prepare_parent(path)
+}
+
+/// Makes `folder` and its parents, naming the first of them that is a file.
+fn prepare_parent(folder: &Path) -> io::Result<()> {
+    if let Some(file) = folder.ancestors().find(|p| p.is_file()) {
+        return Err(io::Error::new(
+            io::ErrorKind::NotADirectory,
+            format!("`{}` is a file, not a folder", file.display()),
+        ));
+    }
+    std::fs::create_dir_all(folder)
+}
 
 /// Longest file name the common file systems take, in bytes.
 pub const MAX_FILE_NAME: usize = 255;

@@ -581,6 +581,63 @@ fn errors_are_one_line_with_the_file_and_offset() {
 }
 
 #[test]
+fn every_verb_refuses_an_output_of_the_wrong_kind_alike_and_makes_missing_folders() {
+    let dir = temp_dir("outputs");
+    let log = snapshot_log(&dir);
+    let l = log.to_str().unwrap();
+    let d = dir.to_str().unwrap();
+    let file = dir.join("a_file");
+    std::fs::write(&file, b"x").unwrap();
+    let f = file.to_str().unwrap();
+    let under_file = file.join("out");
+    let u = under_file.to_str().unwrap();
+    let err = |args: &[&str]| {
+        let out = ulog(args);
+        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        String::from_utf8(out.stderr).unwrap()
+    };
+    // One output file: a folder in its place, or a file in its folder's place.
+    for verb in ["cut", "anonymize", "kml", "report"] {
+        assert_eq!(
+            err(&[verb, l, "-o", d]),
+            format!("ulog: {d}: a folder; the output is a file (give its path)\n"),
+            "{verb}"
+        );
+        assert_eq!(
+            err(&[verb, l, "-o", u]),
+            format!("ulog: {u}: `{f}` is a file, not a folder\n"),
+            "{verb}"
+        );
+    }
+    // A folder of outputs: a file in its place (before any log is converted).
+    for verb in ["csv", "parquet"] {
+        assert_eq!(
+            err(&[verb, l, "-o", f]),
+            format!("ulog: {f}: a file; the output is a folder (give a folder's path)\n"),
+            "{verb}"
+        );
+    }
+    assert_eq!(
+        std::fs::read(&file).unwrap(),
+        b"x",
+        "the file is left as it was"
+    );
+    // Missing folders are made, for one file as for a folder of them.
+    for (verb, out) in [
+        ("cut", "new/cut/out.ulg"),
+        ("anonymize", "new/anonymize/out.ulg"),
+        ("report", "new/report/report.html"),
+        ("csv", "new/csv"),
+        ("parquet", "new/parquet"),
+    ] {
+        let path = dir.join(out);
+        stdout(&[verb, l, "-o", path.to_str().unwrap()]);
+        assert!(path.exists(), "{verb}: {}", path.display());
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn info_shows_the_version_as_pyulog_and_binary_data_as_a_digest() {
     use sha2::Digest;
     let dir = temp_dir("version");

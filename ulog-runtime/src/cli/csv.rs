@@ -44,7 +44,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     };
     let dir = match &args.output {
         Some(d) => {
-            std::fs::create_dir_all(d).map_err(|e| Failure::at(d, e))?;
+            crate::cli::output_folder(d)?;
             d.clone()
         }
         None => args.file.parent().map(Path::to_owned).unwrap_or_default(),

@@ -29,6 +29,7 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
+    crate::cli::output_file(&args.output)?;
     let log = crate::cli::open(&args.file)?;
     crate::cli::check_utf8(&log, &args.file, args.ignore)?;
     crate::cli::report_damage(&log, &args.file);
@@ -38,5 +39,5 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         camera_trigger: args.camera_trigger.clone(),
     };
     let text = kml(&log, &options).map_err(|e| Failure::at(&args.file, e))?;
-    std::fs::write(&args.output, text).map_err(|e| Failure::at(&args.output, e))
+    std::fs::write(&args.output, text).map_err(|e| crate::cli::write_failure(&args.output, &e))
 }

@@ -255,6 +255,23 @@ pub(crate) fn open_mapped(path: &Path) -> Result<crate::read::MappedFile, Failur
     })
 }
 
+/// Makes ready the one file a verb writes ([`crate::file_names::prepare_file`]: a folder
+/// there is refused, missing parent folders made), with plain messages.
+pub(crate) fn output_file(path: &Path) -> Result<(), Failure> {
+    crate::file_names::prepare_file(path).map_err(|e| Failure::at(path, plain_io(&e, false)))
+}
+
+/// Makes ready the folder a verb writes files into ([`crate::file_names::prepare_folder`]: a
+/// file there is refused, the folder made), with plain messages.
+pub(crate) fn output_folder(path: &Path) -> Result<(), Failure> {
+    crate::file_names::prepare_folder(path).map_err(|e| Failure::at(path, plain_io(&e, true)))
+}
+
+/// A failure to write the output file `path`, in plain words.
+pub(crate) fn write_failure(path: &Path, e: &io::Error) -> Failure {
+    Failure::at(path, plain_io(e, false))
+}
+
 /// A plain message when `path` is not what a verb needs: a file (`folder` false) or a
 /// folder (`folder` true).
 pub(crate) fn check_path(path: &Path, folder: bool) -> Result<(), Failure> {

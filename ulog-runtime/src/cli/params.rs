@@ -68,7 +68,9 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     };
     match &args.output {
         Some(path) => {
-            let file = std::fs::File::create(path).map_err(|e| Failure::at(path, e))?;
+            crate::cli::output_file(path)?;
+            let file =
+                std::fs::File::create(path).map_err(|e| crate::cli::write_failure(path, &e))?;
             let mut file = std::io::BufWriter::new(file);
             params(&log, &options, &mut file)
                 .and_then(|()| file.flush().map_err(Into::into))

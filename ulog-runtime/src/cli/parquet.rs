@@ -73,6 +73,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         .properties(Vec::new())
         .map_err(|e| Failure::exit(2, format!("--zstd-level {}: {e}", args.zstd_level)))?;
     crate::cli::check_topics_in_files(&args.files, &args.messages)?;
+    crate::cli::output_folder(&args.output)?;
     let total: u64 = args
         .files
         .iter()

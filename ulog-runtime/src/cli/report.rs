@@ -19,6 +19,10 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
+    let path = args.output.clone().unwrap_or_else(|| {
+        PathBuf::from(format!("{}.html", crate::file_names::log_stem(&args.file)))
+    });
+    crate::cli::output_file(&path)?;
     let log = crate::cli::open(&args.file)?;
     let name = args.file.file_name().map_or_else(
         || args.file.display().to_string(),
@@ -26,11 +30,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     );
     let report = Report::of_log(&log, &name)
         .map_err(|e| Failure::exit(1, format!("{}: {e}", args.file.display())))?;
-    let path = args.output.clone().unwrap_or_else(|| {
-        PathBuf::from(format!("{}.html", crate::file_names::log_stem(&args.file)))
-    });
-    std::fs::write(&path, report.html())
-        .map_err(|e| Failure::exit(1, format!("{}: {e}", path.display())))?;
+    std::fs::write(&path, report.html()).map_err(|e| crate::cli::write_failure(&path, &e))?;
     writeln!(
         out,
         "{}: {} plots ({} the log cannot give), {}",

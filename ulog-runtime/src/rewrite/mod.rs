@@ -601,23 +601,9 @@ impl Rewrite {
             path: output.to_owned(),
             source,
         };
-        if output.is_dir() {
-            return Err(out_error(io::Error::new(
-                io::ErrorKind::IsADirectory,
-                "a folder; the output is a file (give its path)",
-            )));
-        }
         // Read as it is: the stream reader reads in chunks of its own.
         let file = std::fs::File::open(input).map_err(|e| RewriteError::Read(e.into()))?;
-        if let Some(folder) = output.parent().filter(|p| !p.as_os_str().is_empty()) {
-            if folder.exists() && !folder.is_dir() {
-                return Err(out_error(io::Error::new(
-                    io::ErrorKind::NotADirectory,
-                    format!("`{}` is not a folder", folder.display()),
-                )));
-            }
-            std::fs::create_dir_all(folder).map_err(out_error)?;
-        }
+        crate::file_names::prepare_file(output).map_err(out_error)?;
         let mut partial = output.as_os_str().to_owned();
         partial.push(".partial");
         let partial = std::path::PathBuf::from(partial);

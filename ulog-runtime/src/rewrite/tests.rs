@@ -660,7 +660,10 @@ fn the_output_file_gets_its_folder_and_a_folder_in_its_place_is_an_error() {
     let err = Rewrite::new()
         .run_file(&path, &dir.join("a_file").join("out.ulg"))
         .unwrap_err();
-    assert!(err.to_string().contains("a_file` is not a folder"), "{err}");
+    assert!(
+        err.to_string().contains("a_file` is a file, not a folder"),
+        "{err}"
+    );
     // A folder that does not exist yet is made.
     let nested = dir.join("new").join("deeper").join("out.ulg");
     Rewrite::new().run_file(&path, &nested).unwrap();

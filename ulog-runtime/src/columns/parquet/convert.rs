@@ -242,6 +242,11 @@ impl Converter {
         source: &Source<'_>,
         encoders: usize,
     ) -> Result<Conversion, ConvertError> {
+        // A file where the output folder should be is refused before the log is read.
+        crate::file_names::prepare_folder(&self.root).map_err(|source| ConvertError::Io {
+            path: self.root.clone(),
+            source,
+        })?;
         let encoder = if encoders == 0 {
             Encoder::inline(self.options.buffer_bytes)
         } else {

@@ -1343,8 +1343,8 @@ fn a_files_sha256_is_the_same_hashed_as_read_or_on_a_thread_of_its_own() {
 
 #[test]
 fn an_output_folder_that_is_a_file_is_an_error_not_an_endless_search() {
-    // Every log folder name under a file fails alike ("not a directory"): the search for a
-    // free name must stop with that error, not try `f~2`, `f~3`... for ever.
+    // Every log folder name under a file would fail alike ("not a directory"): the
+    // conversion must stop with an error, not try `f~2`, `f~3`... for ever.
     let root = temp("file-root");
     std::fs::create_dir_all(&root).unwrap();
     let file = root.join("out.ulg");
@@ -1362,15 +1362,18 @@ fn an_output_folder_that_is_a_file_is_an_error_not_an_endless_search() {
         let result = rx
             .recv_timeout(std::time::Duration::from_secs(60))
             .unwrap_or_else(|_| panic!("{}: the conversion did not end", out.display()));
+        // Refused before the log is read, naming the output folder.
         let err = result.unwrap_err();
-        assert!(matches!(err, ConvertError::Io { .. }), "{err}");
         assert!(
-            err.to_string().starts_with(&format!(
-                "{}",
-                out.join("f").join("metadata.json").display()
-            )),
+            matches!(&err, ConvertError::Io { path, .. } if *path == out),
             "{err}"
         );
+        let why = if out == file {
+            "a file; the output is a folder (give a folder's path)".to_owned()
+        } else {
+            format!("`{}` is a file, not a folder", file.display())
+        };
+        assert_eq!(err.to_string(), format!("{}: {why}", out.display()));
     }
     assert_eq!(std::fs::read(&file).unwrap(), b"a file, not a folder");
     std::fs::remove_dir_all(&root).unwrap();
