@@ -32,7 +32,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
 
     // The same as Arrow record batches of at most 10,000 rows.
-    if let Some(batches) = record_batches(&log, "vehicle_attitude", 0, 10_000) {
+    // (A log without the topic: an error that suggests the closest names it has.)
+    if let Ok(batches) = record_batches(&log, "vehicle_attitude", 0, 10_000) {
         let schema = batches.schema();
         let (mut n, mut rows) = (0, 0);
         for batch in batches {

@@ -39,7 +39,7 @@ use arrow_array::{
 };
 use arrow_schema::{ArrowError, DataType, Field, Schema, SchemaRef};
 
-use super::{ColumnKind, ColumnSpec, ColumnValues, Columns};
+use super::{ColumnKind, ColumnSpec, ColumnValues, Columns, ColumnsError};
 use crate::read::{InstanceRows, Log};
 use crate::schema::Primitive;
 
@@ -140,19 +140,33 @@ impl std::fmt::Debug for RecordBatches<'_> {
 }
 
 /// The rows of one topic instance of `log` (every subscription of that name and `multi_id`,
-/// rows in file order) as Arrow record batches of at most `rows` rows each; `None` if the
-/// log has no such instance or cannot decode it.
+/// rows in file order) as Arrow record batches of at most `rows` rows each; the errors of
+/// [`Log::columns`] if the log has no such instance (the closest topic names suggested) or
+/// cannot decode it.
+///
+/// ```
+/// # use ulog_runtime::{Log, ULog, Writer, WriterOptions};
+/// # #[derive(ULog)] struct Battery { timestamp: u64, voltage_v: f32 }
+/// # let mut w = Writer::new(Vec::new(), WriterOptions::default())?;
+/// # let sub = w.topic::<Battery>(0)?;
+/// # w.write(&sub, &Battery { timestamp: 1, voltage_v: 16.0 })?;
+/// # let log = Log::from_vec(w.into_inner())?;
+/// use ulog_runtime::columns::arrow::record_batches;
+/// let err = record_batches(&log, "batery", 0, 1024).unwrap_err();
+/// assert_eq!(err.to_string(), "the log has no topic `batery`; did you mean `battery`?");
+/// assert_eq!(record_batches(&log, "battery", 0, 1024)?.count(), 1);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn record_batches<'a>(
     log: &'a Log<'a>,
     topic: &str,
     multi_id: u8,
     rows: usize,
-) -> Option<RecordBatches<'a>> {
-    let subs = log.instance(topic, multi_id);
-    let spec = ColumnSpec::of(log.metadata().schema(), subs.first()?.format()?)?;
+) -> Result<RecordBatches<'a>, ColumnsError> {
+    let (subs, spec) = log.instance_spec(topic, multi_id)?;
     let schema = schema(&spec, topic);
-    Some(RecordBatches {
-        spec: Arc::new(spec),
+    Ok(RecordBatches {
+        spec,
         schema,
         source: log.instance_rows(&subs),
         rows: rows.max(1),

@@ -1040,7 +1040,7 @@ impl Log<'_> {
 
     /// The readable subscriptions of one topic instance and the spec of its columns, or
     /// why there are none ([`Log::columns`]' errors).
-    fn instance_spec(
+    pub(crate) fn instance_spec(
         &self,
         topic: &str,
         multi_id: u8,
