@@ -1163,6 +1163,26 @@ fn info_names_a_version_1_file_without_flag_bits_and_an_absolute_start() {
         ),
         "{text}"
     );
+    // Rows out of time order (a clock stepped back): the rate and duration over their span,
+    // earliest to latest (5 rows from 1 s to 5.5 s: 0.9 Hz over 4.5 s), not 0 as when the
+    // first and the last row in the file (both at 2 s) were taken for the span.
+    for t in [4_000_000u64, 1_000_000, 2_000_000] {
+        Message::Data {
+            msg_id: 0,
+            data: &t.to_le_bytes(),
+        }
+        .encode(&mut bytes)
+        .unwrap();
+    }
+    std::fs::write(&log, &bytes).unwrap();
+    let text = stdout(&["info", log.to_str().unwrap()]);
+    let line = text
+        .lines()
+        .find(|l| l.starts_with(" t "))
+        .expect("the topic's line");
+    let cells: Vec<&str> = line.split_whitespace().collect();
+    assert_eq!(cells[3], "5", "{line}");
+    assert_eq!(cells[6..], ["0.9", "4.5"], "{line}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

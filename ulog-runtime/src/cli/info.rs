@@ -275,10 +275,11 @@ fn info(log: &Log<'_>, file: &Path, verbose: bool, out: &mut impl Write) -> Resu
             continue;
         }
         let size = sub.payload_sizes().map_or(0, |(min, _)| min);
-        let (first, last) = (
-            log.rows(sub).next().map_or(0, |r| r.timestamp),
-            log.rows(sub).next_back().map_or(0, |r| r.timestamp),
-        );
+        // Over the rows' time span, earliest to latest: rows out of time order (a clock
+        // stepped back) neither hide the rate nor make it negative.
+        let (first, last) = log.rows(sub).fold((u64::MAX, 0), |(a, b), r| {
+            (a.min(r.timestamp), b.max(r.timestamp))
+        });
         let span = last.saturating_sub(first) as f64 / 1e6;
         let rate = if span > 0.0 {
             (n - 1) as f64 / span
