@@ -23,16 +23,22 @@ use std::collections::HashMap;
 use std::io;
 use std::path::Path;
 
-/// Makes ready to write the file `path`: a folder there is refused (kind `IsADirectory`:
-/// "a folder; the output is a file (give its path)"), and so is a parent that is not a
-/// folder (kind `NotADirectory`); missing parent folders are made.
+/// Makes ready to write the file `path`: a folder there, or a path ending in a separator
+/// (`out/`), is refused (kind `IsADirectory`: "a folder; the output is a file (give its
+/// path)"), and so is a parent that is not a folder (kind `NotADirectory`); missing parent
+/// folders are made.
 ///
 /// ```
 /// let e = ulog_runtime::file_names::prepare_file(&std::env::temp_dir()).unwrap_err();
 /// assert_eq!(e.to_string(), "a folder; the output is a file (give its path)");
 /// ```
 pub fn prepare_file(path: &Path) -> io::Result<()> {
-    if path.is_dir() {
+    // `out/` names a folder even where none is yet.
+    let folder_named = path
+        .as_os_str()
+        .to_string_lossy()
+        .ends_with(std::path::is_separator);
+    if path.is_dir() || folder_named {
         return Err(io::Error::new(
             io::ErrorKind::IsADirectory,
             "a folder; the output is a file (give its path)",

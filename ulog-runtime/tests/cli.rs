@@ -530,6 +530,22 @@ fn errors_are_one_line_with_the_file_and_offset() {
     );
     let out = ulog(&["params", "--default", "nonsense", garbage.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2), "usage errors exit with 2");
+    // Counts that would convert or buffer nothing are usage errors, before any log is read.
+    for (option, value) in [("-j", "0"), ("--buffer-mb", "0")] {
+        let pq = dir.join("pq0");
+        let out = ulog(&[
+            "parquet",
+            garbage.to_str().unwrap(),
+            "-o",
+            pq.to_str().unwrap(),
+            option,
+            value,
+        ]);
+        assert_eq!(out.status.code(), Some(2), "{option} {value}");
+        let err = String::from_utf8(out.stderr).unwrap();
+        assert!(err.contains("0 is not allowed: give 1 or more"), "{err}");
+        assert!(!pq.exists(), "{option} {value}: nothing written");
+    }
     // Plain messages, the path once.
     let err = |args: &[&str]| {
         let out = ulog(args);
@@ -596,13 +612,17 @@ fn every_verb_refuses_an_output_of_the_wrong_kind_alike_and_makes_missing_folder
         assert_eq!(out.status.code(), Some(1), "{args:?}");
         String::from_utf8(out.stderr).unwrap()
     };
-    // One output file: a folder in its place, or a file in its folder's place.
+    // One output file: a folder in its place (or a path that names one, ending in `/`,
+    // where none is yet), or a file in its folder's place.
+    let slash = format!("{d}/not_yet/");
     for verb in ["cut", "anonymize", "kml", "report"] {
-        assert_eq!(
-            err(&[verb, l, "-o", d]),
-            format!("ulog: {d}: a folder; the output is a file (give its path)\n"),
-            "{verb}"
-        );
+        for folder in [d, slash.as_str()] {
+            assert_eq!(
+                err(&[verb, l, "-o", folder]),
+                format!("ulog: {folder}: a folder; the output is a file (give its path)\n"),
+                "{verb}"
+            );
+        }
         assert_eq!(
             err(&[verb, l, "-o", u]),
             format!("ulog: {u}: `{f}` is a file, not a folder\n"),
@@ -610,7 +630,7 @@ fn every_verb_refuses_an_output_of_the_wrong_kind_alike_and_makes_missing_folder
         );
     }
     // A folder of outputs: a file in its place (before any log is converted).
-    for verb in ["csv", "parquet"] {
+    for verb in ["csv", "parquet", "gps-dump"] {
         assert_eq!(
             err(&[verb, l, "-o", f]),
             format!("ulog: {f}: a file; the output is a folder (give a folder's path)\n"),
@@ -629,6 +649,7 @@ fn every_verb_refuses_an_output_of_the_wrong_kind_alike_and_makes_missing_folder
         ("report", "new/report/report.html"),
         ("csv", "new/csv"),
         ("parquet", "new/parquet"),
+        ("gps-dump", "new/gps-dump"),
     ] {
         let path = dir.join(out);
         stdout(&[verb, l, "-o", path.to_str().unwrap()]);
@@ -770,6 +791,12 @@ fn check_msg_says_whether_a_folder_makes_a_logs_formats() {
     assert_eq!(
         String::from_utf8(out.stdout).unwrap(),
         "0/0 formats identical\n"
+    );
+    // The folder is what lacks the formats: the error names it first.
+    let d = dir.to_str().unwrap();
+    assert_eq!(
+        String::from_utf8(out.stderr).unwrap(),
+        format!("ulog: {d}: defines none of the formats of {q}\n")
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }

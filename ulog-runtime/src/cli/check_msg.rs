@@ -77,7 +77,8 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
             1,
             if m == 0 {
                 format!(
-                    "{}: the folder defines none of the log's formats",
+                    "{}: defines none of the formats of {}",
+                    args.dir.display(),
                     args.file.display()
                 )
             } else {

@@ -36,7 +36,7 @@ pub(crate) struct Args {
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     let window = crate::cli::window(args.start, args.end)?;
     let log = crate::cli::open(&args.file)?;
-    crate::cli::check_utf8(&log, &args.file, args.ignore)?;
+    crate::cli::check_utf8(&log, &args.file, args.ignore, "-i")?;
     crate::cli::check_topics(&log, &args.file, &args.messages)?;
     let options = CsvOptions {
         delimiter: args.delimiter.clone(),

@@ -26,16 +26,11 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
-    if let Some(dir) = &args.output
-        && !dir.is_dir()
-    {
-        return Err(Failure::exit(
-            2,
-            format!("the directory {} does not exist", dir.display()),
-        ));
+    if let Some(dir) = &args.output {
+        crate::cli::output_folder(dir)?;
     }
     let log = crate::cli::open(&args.file)?;
-    crate::cli::check_utf8(&log, &args.file, args.ignore)?;
+    crate::cli::check_utf8(&log, &args.file, args.ignore, "-x")?;
     crate::cli::report_damage(&log, &args.file);
     crate::cli::pyulog_warnings(&log, out)?;
     let dump = match gps_dump(&log, args.instance) {

@@ -35,7 +35,7 @@ pub(crate) struct Args {
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     let log = crate::cli::open(&args.file)?;
-    crate::cli::check_utf8(&log, &args.file, args.ignore)?;
+    crate::cli::check_utf8(&log, &args.file, args.ignore, "-i")?;
     if let Some(name) = &args.message {
         crate::cli::report_damage(&log, &args.file);
         crate::cli::pyulog_warnings(&log, out)?;

@@ -31,7 +31,7 @@ pub(crate) struct Args {
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     crate::cli::output_file(&args.output)?;
     let log = crate::cli::open(&args.file)?;
-    crate::cli::check_utf8(&log, &args.file, args.ignore)?;
+    crate::cli::check_utf8(&log, &args.file, args.ignore, "-i")?;
     crate::cli::report_damage(&log, &args.file);
     crate::cli::pyulog_warnings(&log, out)?;
     let options = KmlOptions {

@@ -26,7 +26,7 @@ pub(crate) struct Args {
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     let log = crate::cli::open(&args.file)?;
-    crate::cli::check_utf8(&log, &args.file, args.ignore)?;
+    crate::cli::check_utf8(&log, &args.file, args.ignore, "-i")?;
     crate::cli::report_damage(&log, &args.file);
     let m = messages(&log);
     for note in &m.notes {

@@ -313,12 +313,20 @@ pub(crate) fn report_damage(log: &Log<'_>, file: &Path) {
 }
 
 /// As pyulog's tools without `-i`: text that is not UTF-8 anywhere in the log is an error.
-pub(crate) fn check_utf8(log: &Log<'_>, path: &Path, ignore: bool) -> Result<(), Failure> {
+/// `flag` is the verb's spelling of the option that allows it (`-i`, `-x`, `--ignore`),
+/// named in the error.
+pub(crate) fn check_utf8(
+    log: &Log<'_>,
+    path: &Path,
+    ignore: bool,
+    flag: &str,
+) -> Result<(), Failure> {
     match log.not_utf8().first() {
         Some(at) if !ignore => Err(Failure::at(
             path,
             format!(
-                "at byte {at}: text that is not valid UTF-8 (-i leaves out the invalid bytes, as pyulog's -i does)"
+                "at byte {at}: text that is not valid UTF-8 ({flag} leaves out the invalid \
+                 bytes, as pyulog's {flag} does)"
             ),
         )),
         _ => Ok(()),

@@ -48,7 +48,7 @@ enum FormatArg {
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     let log = crate::cli::open(&args.file)?;
-    crate::cli::check_utf8(&log, &args.file, args.ignore)?;
+    crate::cli::check_utf8(&log, &args.file, args.ignore, "--ignore")?;
     crate::cli::report_damage(&log, &args.file);
     crate::cli::pyulog_warnings(&log, out)?;
     let options = ParamsOptions {

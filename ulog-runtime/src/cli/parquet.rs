@@ -34,7 +34,7 @@ pub(crate) struct Args {
     #[arg(long, value_enum, default_value = "per-log")]
     layout: LayoutArg,
     /// Logs converted at once (default: one per core).
-    #[arg(short, long)]
+    #[arg(short, long, value_parser = at_least_one)]
     jobs: Option<usize>,
     /// ZSTD compression level.
     #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
@@ -44,7 +44,7 @@ pub(crate) struct Args {
     no_analysis: bool,
     /// Memory for rows waiting for their row group, MiB per log (more: fewer, larger row
     /// groups).
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 16, value_parser = at_least_one)]
     buffer_mb: usize,
 }
 
@@ -65,7 +65,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
             LayoutArg::Hive => Layout::Hive,
         },
         analysis: !args.no_analysis,
-        buffer_bytes: args.buffer_mb.max(1) << 20,
+        buffer_bytes: args.buffer_mb.saturating_mul(1 << 20),
         ..ParquetOptions::default()
     };
     // Refused here rather than once per log.
@@ -142,4 +142,13 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         ));
     }
     Ok(())
+}
+
+/// A count of 1 or more (`-j`, `--buffer-mb`): 0 would convert nothing, or buffer nothing.
+fn at_least_one(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(0) => Err("0 is not allowed: give 1 or more".to_owned()),
+        Ok(n) => Ok(n),
+        Err(e) => Err(e.to_string()),
+    }
 }

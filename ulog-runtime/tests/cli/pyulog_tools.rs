@@ -185,6 +185,30 @@ fn messages_without_ignore_refuse_text_that_is_not_utf8() {
         assert!(!strict.status.success(), "pyulog fails too without -i");
     }
     assert_eq!(ours, "0:00:02.000 INFO: caf ok\n");
+    // Each verb's refusal names its own spelling of the option, and that spelling works
+    // (`params -i` is `--initial`, `gps-dump -i` its instance).
+    for (verb, flag) in [
+        ("messages", "-i"),
+        ("info", "-i"),
+        ("params", "--ignore"),
+        ("gps-dump", "-x"),
+    ] {
+        let refused = ulog(&[verb, file]);
+        assert_eq!(refused.status.code(), Some(1), "{verb}");
+        let err = String::from_utf8_lossy(&refused.stderr).into_owned();
+        assert!(
+            err.contains(&format!(
+                "not valid UTF-8 ({flag} leaves out the invalid bytes, as pyulog's {flag} does)"
+            )),
+            "{verb}: {err}"
+        );
+        let allowed = ulog(&[verb, flag, file]);
+        assert!(
+            !String::from_utf8_lossy(&allowed.stderr).contains("UTF-8"),
+            "{verb} {flag}: {}",
+            String::from_utf8_lossy(&allowed.stderr)
+        );
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
