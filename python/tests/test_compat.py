@@ -116,6 +116,14 @@ def test_options_and_file_objects_as_pyulog_takes_them(corpus_log, capsys):
         assert bufs[1].closed
         capsys.readouterr()
         check_pair(theirs, ours)
+    # Beyond pyulog: a pathlib.Path is its str; anything else is a TypeError that says what
+    # is taken (pyulog fails on a missing attribute).
+    import pathlib
+
+    check_pair(pyulog.ULog(path), ulog.ULog(pathlib.Path(path)))
+    capsys.readouterr()
+    with pytest.raises(TypeError, match="ULog takes a path or a binary file object .* not bytes"):
+        ulog.ULog(data)
 
 
 def test_written_logs_are_pyulogs_bytes(corpus_log, tmp_path):

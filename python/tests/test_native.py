@@ -9,6 +9,7 @@ import io
 import json
 import os
 import pickle
+import re
 import struct
 import subprocess
 import sys
@@ -143,6 +144,21 @@ def test_polars_duckdb_and_pandas_take_a_table():
     start, end = ts[10] / 1e6, ts[20] / 1e6
     w = log.table("vehicle_attitude", start=start, end=end)
     assert np.array_equal(pl.DataFrame(w)["timestamp"].to_numpy(), ts[10:20])
+    # A window none of its rows lie in (microseconds given for seconds): no row, and a
+    # warning that says where the rows lie, as `ulog csv` says it.
+    with pytest.warns(UserWarning) as said:
+        empty = log.table("vehicle_attitude", start=float(ts[10]))
+    assert empty.num_rows == 0
+    [message] = [str(w.message) for w in said]
+    found = re.fullmatch(
+        r"no row of `vehicle_attitude` #0 lies in the window from (\S+) s "
+        r"\(its rows run from (\S+) s to (\S+) s\)",
+        message,
+    )
+    assert found, message
+    given, first, last = (float(x) for x in found.groups())
+    assert given == pytest.approx(float(ts[10]), rel=1e-12)
+    assert (first * 1e6, last * 1e6) == pytest.approx((ts.min(), ts.max()), abs=0.5)
     with pytest.raises(KeyError, match="did you mean `vehicle_attitude`"):
         log.table("vehicle_atitude")
     with pytest.raises(KeyError, match="no column `q\\[9\\]`"):
@@ -192,6 +208,10 @@ def test_the_log_says_what_the_reader_read():
     assert ulog.open(io.BytesIO(path.read_bytes())).topics() == log.topics()
     with pytest.raises(TypeError, match="binary file object"):
         with open(path, "r", encoding="latin-1") as f:
+            ulog.open(f)
+    # Refused before it is read: UTF-8 text mode would fail reading the log's bytes.
+    with pytest.raises(TypeError, match="binary file object"):
+        with open(path, "r", encoding="utf-8") as f:
             ulog.open(f)
     with pytest.raises(TypeError, match="not int"):
         ulog.open(3)

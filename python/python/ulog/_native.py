@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import json
 import operator
 import os
@@ -205,7 +206,8 @@ class Log:
         is not a filter on each row's time. KeyError (naming the closest) for a topic,
         instance or column the log lacks; TypeError for a ``multi_id`` that is not an int;
         ValueError for a column named twice, a bound that is NaN or infinite, or an ``end``
-        at or before ``start``."""
+        at or before ``start``; a UserWarning, saying where the rows lie, when the window
+        holds none of the instance's rows."""
         if isinstance(columns, str):
             columns = [columns]
         if columns is not None:
@@ -221,9 +223,23 @@ class Log:
             if have:
                 raise KeyError(f"`{topic}` has no instance {multi_id} (instances: {have})")
             multi_id = 0
-        return Table(
-            self._native.table(topic, multi_id, columns, start, end)
-        )
+        table = Table(self._native.table(topic, multi_id, columns, start, end))
+        if table.num_rows == 0 and (start is not None or end is not None):
+            # As `ulog csv` says it: a window none of the instance's rows lie in (seconds
+            # where microseconds were meant, say) is said, with where the rows lie.
+            spans = [
+                (t["first_timestamp"], t["last_timestamp"])
+                for t in self.topics()
+                if t["name"] == topic and t["multi_id"] == multi_id
+            ]
+            if spans:
+                first, last = min(spans[0]), max(spans[0])
+                warnings.warn(
+                    f"no row of `{topic}` #{multi_id} lies{_ulog.window_words(start, end)} "
+                    f"(its rows run from {_seconds(first)} s to {_seconds(last)} s)",
+                    stacklevel=2,
+                )
+        return table
 
     def tables(self) -> Dict[tuple, Table]:
         """Every topic instance's table, by ``(topic, multi_id)``, made in one pass over the
@@ -236,6 +252,13 @@ class Log:
 
     def __repr__(self) -> str:
         return repr(self._native)
+
+
+def _seconds(us: int) -> str:
+    """Microseconds as seconds, in the shortest digits that give them back (as the ``ulog``
+    command prints times: ``20.33``, ``5``)."""
+    text = repr(us / 1e6)
+    return text[:-2] if text.endswith(".0") else text
 
 
 def _count(name: str, value: Any) -> int:
@@ -270,6 +293,10 @@ def open(  # noqa: A001
                 "ulog.open takes a path, the file's bytes or a binary file object, not "
                 f"{type(source).__name__}"
             )
+        # A text file object is refused before it is read (its read() would decode the log
+        # as text and fail on the first invalid byte).
+        if isinstance(source, io.TextIOBase):
+            raise TypeError("ulog.open needs a binary file object (opened with 'rb')")
         source = read()
         if not isinstance(source, (bytes, bytearray, memoryview)):
             raise TypeError("ulog.open needs a binary file object (opened with 'rb')")

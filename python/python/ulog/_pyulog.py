@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import copy
+import os
 import struct
 from types import SimpleNamespace
 from typing import Any, BinaryIO, Dict, Iterable, List, Optional, Tuple, Union
@@ -90,7 +91,7 @@ class ULog:
 
     def __init__(
         self,
-        log_file: Union[str, BinaryIO, None],
+        log_file: Union[str, "os.PathLike[str]", BinaryIO, None],
         message_name_filter_list: Optional[Union[Iterable[str], str]] = None,
         disable_str_exceptions: bool = True,
         parse_header_only: bool = False,
@@ -133,6 +134,16 @@ class ULog:
         if filt is not None and not isinstance(filt, str):
             filt = list(filt)
         strict = not ULog._disable_str_exceptions
+        if isinstance(log_file, os.PathLike):
+            # pyulog takes a str; a pathlib.Path is the same file.
+            log_file = os.fsdecode(log_file)
+        elif not isinstance(log_file, str) and not (
+            hasattr(log_file, "read") and hasattr(log_file, "tell")
+        ):
+            raise TypeError(
+                "ULog takes a path or a binary file object (opened with 'rb'), not "
+                f"{type(log_file).__name__} (ulog.open takes a log's bytes)"
+            )
         if isinstance(log_file, str):
             # The errors pyulog's own open() raises (no such file, a folder...).
             with open(log_file, "rb"):
