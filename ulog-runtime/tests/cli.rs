@@ -1131,6 +1131,42 @@ fn csv_and_json_say_what_they_skip() {
 }
 
 #[test]
+fn info_lists_a_damaged_definition_in_printable_text() {
+    use ulog_runtime::read::{FileHeader, FlagBits, Message};
+    let mut bytes = FileHeader {
+        version: 1,
+        start_timestamp: 0,
+    }
+    .to_bytes()
+    .to_vec();
+    let mut put = |m: Message<'_>| m.encode(&mut bytes).unwrap();
+    put(Message::FlagBits(FlagBits::default()));
+    // A type name zeroed in the middle, as a damaged file has it.
+    put(Message::Format(b"t:uint64_t timestamp;f\0\0\0 x;"));
+    put(Message::Subscribe {
+        multi_id: 0,
+        msg_id: 0,
+        name: b"t",
+    });
+    let dir = temp_dir("nul");
+    let log = dir.join("nul.ulg");
+    std::fs::write(&log, &bytes).unwrap();
+    let text = stdout(&["info", "-v", log.to_str().unwrap()]);
+    assert!(!text.contains('\0'), "{text:?}");
+    let damage = text
+        .lines()
+        .skip_while(|l| !l.starts_with("Damage:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .collect::<Vec<_>>();
+    assert!(
+        damage.iter().any(|l| l.contains("f\\u{0}\\u{0}\\u{0}")),
+        "{damage:?}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn info_names_a_version_1_file_without_flag_bits_and_an_absolute_start() {
     use ulog_runtime::read::{FileHeader, Message};
     let mut bytes = FileHeader {

@@ -304,11 +304,31 @@ pub(crate) fn pyulog_warnings(log: &Log<'_>, out: &mut impl Write) -> Result<(),
     Ok(())
 }
 
+/// Text from a log with its control characters written as escapes (`\u{0}` for a NUL of a
+/// damaged definition, `\n`, `\u{1b}`), so that what a damaged log says stays one
+/// printable line.
+pub(crate) fn printable(text: &str) -> std::borrow::Cow<'_, str> {
+    if text.chars().any(char::is_control) {
+        text.chars()
+            .map(|c| {
+                if c.is_control() {
+                    c.escape_default().to_string()
+                } else {
+                    c.to_string()
+                }
+            })
+            .collect::<String>()
+            .into()
+    } else {
+        text.into()
+    }
+}
+
 /// Says on stderr the damage the reader skipped, for the verbs that mirror a pyulog tool:
 /// their output is what this reader recovers, and a damaged log is never silent.
 pub(crate) fn report_damage(log: &Log<'_>, file: &Path) {
     for line in log.skipped().damage_lines() {
-        eprintln!("ulog: {}: {line}", file.display());
+        eprintln!("ulog: {}: {}", file.display(), printable(&line));
     }
 }
 
