@@ -677,7 +677,7 @@ fn info_shows_the_version_as_pyulog_and_binary_data_as_a_digest() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
     // pyulog's `SW Version` line, on every corpus log.
-    let mut compared = 0;
+    let (mut compared, mut developments) = (0, 0);
     for path in corpus_files() {
         let Some(theirs) = pyulog_info(&path) else {
             continue;
@@ -686,16 +686,37 @@ fn info_shows_the_version_as_pyulog_and_binary_data_as_a_digest() {
             .lines()
             .find_map(|l| l.strip_prefix("SW Version: "))
             .map(str::to_owned);
-        let ours = stdout(&["info", path.to_str().unwrap()]);
-        let ours = ours
-            .lines()
-            .find_map(|l| l.strip_prefix("Software:   "))
-            .filter(|v| v.starts_with('v'))
-            .map(str::to_owned);
+        let text = stdout(&["info", path.to_str().unwrap()]);
+        let software = text.lines().find_map(|l| l.strip_prefix("Software:   "));
+        let ours = software.filter(|v| v.starts_with('v')).map(str::to_owned);
         assert_eq!(ours, theirs, "{}", short_name(&path));
         compared += 1;
+        // Where pyulog gives no version (a development build), the numbers of the log's
+        // `ver_sw_release` (0xMMmmpptt) are still shown.
+        if let Some(dev) = software.and_then(|s| s.strip_prefix("a development build ")) {
+            let release: u32 = text
+                .lines()
+                .find_map(|l| l.trim().strip_prefix("ver_sw_release"))
+                .and_then(|v| v.trim().parse().ok())
+                .expect("a development build is known from ver_sw_release");
+            let [major, minor, patch, _] = release.to_be_bytes();
+            assert_eq!(
+                dev,
+                format!("(ver_sw_release {major}.{minor}.{patch})"),
+                "{}",
+                short_name(&path)
+            );
+            developments += 1;
+        }
     }
-    eprintln!("software versions compared with pyulog on {compared} logs");
+    eprintln!(
+        "software versions compared with pyulog on {compared} logs \
+         ({developments} development builds)"
+    );
+    assert!(
+        compared == 0 || developments > 0,
+        "the corpus has development builds"
+    );
 }
 
 /// pyulog's `ulog_info` output, run live (required under CI).

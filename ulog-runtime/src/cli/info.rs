@@ -115,7 +115,13 @@ fn info(log: &Log<'_>, file: &Path, verbose: bool, out: &mut impl Write) -> Resu
     )?;
     match (meta.software_version(), meta.version_info()) {
         (Some(v), _) => writeln!(out, "Software:   {v}")?,
-        (None, Some(_)) => writeln!(out, "Software:   a development build")?,
+        // pyulog gives no version string for one; the numbers `ver_sw_release` holds are
+        // still shown.
+        (None, Some(v)) => writeln!(
+            out,
+            "Software:   a development build (ver_sw_release {}.{}.{})",
+            v.major, v.minor, v.patch
+        )?,
         (None, None) => {}
     }
     let start = header.start_timestamp;
