@@ -49,6 +49,25 @@ fn temp_dir(name: &str) -> PathBuf {
     dir
 }
 
+/// A log built by hand from the spec: the header (version 1, start 0), the flag bits, then
+/// `messages` in order.
+fn hand_built(messages: &[ulog_runtime::read::Message<'_>]) -> Vec<u8> {
+    use ulog_runtime::read::{FileHeader, FlagBits, Message};
+    let mut bytes = FileHeader {
+        version: 1,
+        start_timestamp: 0,
+    }
+    .to_bytes()
+    .to_vec();
+    Message::FlagBits(FlagBits::default())
+        .encode(&mut bytes)
+        .unwrap();
+    for m in messages {
+        m.encode(&mut bytes).unwrap();
+    }
+    bytes
+}
+
 /// Runs pyulog's `ulog2csv` if pyulog is installed (required under CI).
 fn ulog2csv(file: &Path, dir: &Path) -> bool {
     let ok = Command::new("python3")
@@ -908,7 +927,7 @@ fn a_closed_output_pipe_is_not_an_error() {
 
 #[test]
 fn csv_file_names_stay_in_the_folder_and_never_collide_silently() {
-    use ulog_runtime::read::{FileHeader, FlagBits, Message};
+    use ulog_runtime::read::Message;
     let long = "x".repeat(300);
     let names = [
         "a/b",
@@ -919,15 +938,7 @@ fn csv_file_names_stay_in_the_folder_and_never_collide_silently() {
         "name with space",
         long.as_str(),
     ];
-    let mut bytes = FileHeader {
-        version: 1,
-        start_timestamp: 0,
-    }
-    .to_bytes()
-    .to_vec();
-    Message::FlagBits(FlagBits::default())
-        .encode(&mut bytes)
-        .unwrap();
+    let mut bytes = hand_built(&[]);
     for name in names {
         let format = format!("{name}:uint64_t timestamp;");
         Message::Format(format.as_bytes())
@@ -1011,34 +1022,28 @@ fn csv_file_names_stay_in_the_folder_and_never_collide_silently() {
 
 #[test]
 fn csv_and_json_say_what_they_skip() {
-    use ulog_runtime::read::{FileHeader, FlagBits, Message};
-    let mut bytes = FileHeader {
-        version: 1,
-        start_timestamp: 0,
-    }
-    .to_bytes()
-    .to_vec();
-    let mut put = |m: Message<'_>| m.encode(&mut bytes).unwrap();
-    put(Message::FlagBits(FlagBits::default()));
-    put(Message::Format(b"a:uint64_t timestamp;missing_type m;"));
-    put(Message::Subscribe {
-        multi_id: 0,
-        msg_id: 0,
-        name: b"a",
-    });
-    put(Message::Subscribe {
-        multi_id: 0,
-        msg_id: 1,
-        name: b"undefined",
-    });
-    put(Message::Data {
-        msg_id: 0,
-        data: &[0; 9],
-    });
-    put(Message::Data {
-        msg_id: 7,
-        data: &[0; 8],
-    });
+    use ulog_runtime::read::Message;
+    let bytes = hand_built(&[
+        Message::Format(b"a:uint64_t timestamp;missing_type m;"),
+        Message::Subscribe {
+            multi_id: 0,
+            msg_id: 0,
+            name: b"a",
+        },
+        Message::Subscribe {
+            multi_id: 0,
+            msg_id: 1,
+            name: b"undefined",
+        },
+        Message::Data {
+            msg_id: 0,
+            data: &[0; 9],
+        },
+        Message::Data {
+            msg_id: 7,
+            data: &[0; 8],
+        },
+    ]);
     let dir = temp_dir("skips");
     let log = dir.join("unreadable.ulg");
     std::fs::write(&log, &bytes).unwrap();
@@ -1153,22 +1158,16 @@ fn csv_and_json_say_what_they_skip() {
 
 #[test]
 fn info_lists_a_damaged_definition_in_printable_text() {
-    use ulog_runtime::read::{FileHeader, FlagBits, Message};
-    let mut bytes = FileHeader {
-        version: 1,
-        start_timestamp: 0,
-    }
-    .to_bytes()
-    .to_vec();
-    let mut put = |m: Message<'_>| m.encode(&mut bytes).unwrap();
-    put(Message::FlagBits(FlagBits::default()));
-    // A type name zeroed in the middle, as a damaged file has it.
-    put(Message::Format(b"t:uint64_t timestamp;f\0\0\0 x;"));
-    put(Message::Subscribe {
-        multi_id: 0,
-        msg_id: 0,
-        name: b"t",
-    });
+    use ulog_runtime::read::Message;
+    let bytes = hand_built(&[
+        // A type name zeroed in the middle, as a damaged file has it.
+        Message::Format(b"t:uint64_t timestamp;f\0\0\0 x;"),
+        Message::Subscribe {
+            multi_id: 0,
+            msg_id: 0,
+            name: b"t",
+        },
+    ]);
     let dir = temp_dir("nul");
     let log = dir.join("nul.ulg");
     std::fs::write(&log, &bytes).unwrap();

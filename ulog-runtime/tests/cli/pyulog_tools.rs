@@ -156,21 +156,12 @@ fn messages_as_json_lines_carry_every_field() {
 
 #[test]
 fn messages_without_ignore_refuse_text_that_is_not_utf8() {
-    use ulog_runtime::read::{FileHeader, FlagBits, Message};
-    let mut bytes = FileHeader {
-        version: 1,
-        start_timestamp: 0,
-    }
-    .to_bytes()
-    .to_vec();
-    let mut put = |m: Message<'_>| m.encode(&mut bytes).unwrap();
-    put(Message::FlagBits(FlagBits::default()));
-    put(Message::Logging {
+    let bytes = super::hand_built(&[ulog_runtime::read::Message::Logging {
         level: b'6',
         tag: None,
         timestamp: 2_000_000,
         text: b"caf\xe9 ok",
-    });
+    }]);
     let dir = temp_dir("utf8");
     let log = dir.join("latin1.ulg");
     std::fs::write(&log, &bytes).unwrap();
