@@ -70,6 +70,11 @@ fn hand_built(messages: &[ulog_runtime::read::Message<'_>]) -> Vec<u8> {
 
 /// Runs pyulog's `ulog2csv` if pyulog is installed (required under CI).
 fn ulog2csv(file: &Path, dir: &Path) -> bool {
+    ulog2csv_with(file, dir, &[])
+}
+
+/// [`ulog2csv`] with more options.
+fn ulog2csv_with(file: &Path, dir: &Path, options: &[&str]) -> bool {
     let ok = Command::new("python3")
         .args([
             "-c",
@@ -78,6 +83,7 @@ fn ulog2csv(file: &Path, dir: &Path) -> bool {
         .arg(file)
         .arg("-o")
         .arg(dir)
+        .args(options)
         .output()
         .is_ok_and(|o| o.status.success());
     assert!(
@@ -254,6 +260,35 @@ fn csv_options_select_topics_time_and_delimiter() {
         assert!(stamps.iter().all(|t| window.contains(t)), "{stamps:?}");
         // ulog2csv's rule: from the first row at or after the start.
         assert!(stamps[0] - window.start < 200_000, "{stamps:?}");
+    }
+    // Names of a `-m` list lose the spaces around them and empty ones are left out: as
+    // for ulog2csv, `-m ""` names no topic, so every topic is written.
+    let listed = |m: &str, to: &str| {
+        let to = dir.join(to);
+        stdout(&[
+            "csv",
+            path.to_str().unwrap(),
+            "-o",
+            to.to_str().unwrap(),
+            "-m",
+            m,
+        ]);
+        csv_files(&to).into_keys().collect::<Vec<_>>()
+    };
+    assert_eq!(
+        listed(" vehicle_attitude , sensor_combined,", "spaced"),
+        [
+            "sample_log_small_sensor_combined_0.csv",
+            "sample_log_small_vehicle_attitude_0.csv"
+        ]
+    );
+    let every = listed("", "every");
+    assert_eq!(every.len(), log.topics().len(), "{every:?}");
+    if ulog2csv_with(&path, &dir.join("theirs"), &["-m", ""]) {
+        let theirs = csv_files(&dir.join("theirs"))
+            .into_keys()
+            .collect::<Vec<_>>();
+        assert_eq!(every, theirs);
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

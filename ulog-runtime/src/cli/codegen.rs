@@ -30,10 +30,11 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
+    let messages = crate::cli::topic_list(&args.messages);
     if args.files.is_empty() && args.msg_dir.is_empty() {
         return Err(Failure::exit(2, "give logs, or `--msg-dir DIR`"));
     }
-    let topics: Vec<&str> = args.messages.iter().map(String::as_str).collect();
+    let topics: Vec<&str> = messages.iter().map(String::as_str).collect();
     let mut builder = Builder::new();
     for file in &args.files {
         let log = crate::cli::open(file)?;
@@ -48,7 +49,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
             && args.files.len() == 1
             && args.msg_dir.is_empty()
         {
-            let missing: Vec<String> = args.messages.clone();
+            let missing: Vec<String> = messages.clone();
             crate::cli::check_topics(&log, file, &missing)?;
         }
         if topics.is_empty() {

@@ -34,10 +34,11 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
+    let messages = crate::cli::topic_list(&args.messages);
     let window = crate::cli::window(args.start, args.end)?;
     let log = crate::cli::open(&args.file)?;
     crate::cli::check_utf8(&log, &args.file, args.ignore, "-i")?;
-    crate::cli::check_topics(&log, &args.file, &args.messages)?;
+    crate::cli::check_topics(&log, &args.file, &messages)?;
     let options = CsvOptions {
         delimiter: args.delimiter.clone(),
         window,
@@ -51,7 +52,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     };
     let stem = crate::file_names::log_stem(&args.file);
     let mut progress = Progress::new(log.row_count(), log.bytes().len());
-    let written = export(&log, &stem, &dir, &args.messages, &options, &mut || {
+    let written = export(&log, &stem, &dir, &messages, &options, &mut || {
         progress.add(1);
     })
     .map_err(|(path, e)| Failure::at(&path, e))?;
@@ -77,7 +78,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         let topics: Vec<_> = log
             .topics()
             .into_iter()
-            .filter(|t| args.messages.is_empty() || args.messages.contains(&t.name))
+            .filter(|t| messages.is_empty() || messages.contains(&t.name))
             .collect();
         let first = topics.iter().filter_map(|t| t.first_timestamp).min();
         let last = topics.iter().filter_map(|t| t.last_timestamp).max();
@@ -86,7 +87,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     crate::cli::report_skipped(
         &log.skipped(),
         &args.file,
-        &args.messages,
+        &messages,
         written.is_empty().then_some("CSV"),
         // Which files there are does not depend on the window (a topic with no row in it
         // gets its header line, as ulog2csv writes it).

@@ -31,14 +31,16 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
+    let messages = crate::cli::topic_list(&args.messages);
+    let exclude = crate::cli::topic_list(&args.exclude);
     let window = crate::cli::window(args.start, args.end)?;
     crate::cli::check_path(&args.file, false)?;
-    let topics: Vec<String> = args.messages.iter().chain(&args.exclude).cloned().collect();
+    let topics: Vec<String> = messages.iter().chain(&exclude).cloned().collect();
     crate::cli::check_topics_in_files(std::slice::from_ref(&args.file), &topics)?;
     let both: Vec<&str> = args
         .messages
         .iter()
-        .filter(|t| args.exclude.contains(t))
+        .filter(|t| exclude.contains(t))
         .map(String::as_str)
         .collect();
     if !both.is_empty() {
@@ -51,8 +53,8 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     }
     let report = Rewrite::new()
         .window(window)
-        .topics(&args.messages)
-        .exclude(&args.exclude)
+        .topics(&messages)
+        .exclude(&exclude)
         .run_file(&args.file, &args.output)
         .map_err(|e| crate::cli::rewrite_failure(&args.file, e))?;
     // Rows of the topics kept, read and written: none written of some read is the window's

@@ -32,15 +32,16 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
+    let messages = crate::cli::topic_list(&args.messages);
     let log = crate::cli::open(&args.file)?;
-    crate::cli::check_topics(&log, &args.file, &args.messages)?;
+    crate::cli::check_topics(&log, &args.file, &messages)?;
     if args.document {
-        serde_json::to_writer_pretty(&mut *out, &Document::new(&log, &args.messages))?;
+        serde_json::to_writer_pretty(&mut *out, &Document::new(&log, &messages))?;
         out.write_all(b"\n")?;
-        report_skipped(&log, args);
+        report_skipped(&log, args, &messages);
         return Ok(());
     }
-    let wanted = |s: &Subscription| args.messages.is_empty() || args.messages.contains(&s.name);
+    let wanted = |s: &Subscription| messages.is_empty() || messages.contains(&s.name);
     let mut lines = 0usize;
     for row in log.data() {
         if !wanted(row.subscription) {
@@ -56,13 +57,13 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         serde_json::to_writer(&mut *out, &line)?;
         out.write_all(b"\n")?;
     }
-    report_skipped(&log, args);
+    report_skipped(&log, args, &messages);
     if lines == 0 {
         // An empty output is a valid JSON Lines file: say why it is empty.
         eprintln!(
             "ulog: {}: {}",
             args.file.display(),
-            crate::columns::Window::default().nothing_written("row", &args.messages)
+            crate::columns::Window::default().nothing_written("row", &messages)
         );
     }
     Ok(())
@@ -70,11 +71,11 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
 
 /// What the output lacks of the file (damage, unreadable topics, rows that do not fit), on
 /// stderr as the other exports say it; the document also holds it under `skipped`.
-fn report_skipped(log: &Log<'_>, args: &Args) {
+fn report_skipped(log: &Log<'_>, args: &Args, messages: &[String]) {
     crate::cli::report_skipped(
         &log.skipped(),
         &args.file,
-        &args.messages,
+        messages,
         None,
         &crate::columns::Window::default(),
     );

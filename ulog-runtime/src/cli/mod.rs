@@ -353,6 +353,18 @@ pub(crate) fn check_utf8(
     }
 }
 
+/// The names of a `-m` list (`-m a,b`) without the spaces around them (`-m "a, b"`), and
+/// without empty ones: as for pyulog's tools, `-m ""` names no topic, so every topic is
+/// taken, and a comma too many (`-m a,`) adds none.
+pub(crate) fn topic_list(names: &[String]) -> Vec<String> {
+    names
+        .iter()
+        .map(|n| n.trim())
+        .filter(|n| !n.is_empty())
+        .map(str::to_owned)
+        .collect()
+}
+
 /// Checks that every topic of a `-m` list is one the log defines; the error names the
 /// closest it has.
 pub(crate) fn check_topics(log: &Log<'_>, path: &Path, topics: &[String]) -> Result<(), Failure> {

@@ -55,10 +55,11 @@ enum LayoutArg {
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
+    let messages = crate::cli::topic_list(&args.messages);
     let window = crate::cli::window(args.start, args.end)?;
     let options = ParquetOptions {
         zstd_level: args.zstd_level,
-        topics: args.messages.clone(),
+        topics: messages.clone(),
         window,
         layout: match args.layout {
             LayoutArg::PerLog => Layout::PerLog,
@@ -72,7 +73,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     options
         .properties(Vec::new())
         .map_err(|e| Failure::exit(2, format!("--zstd-level {}: {e}", args.zstd_level)))?;
-    crate::cli::check_topics_in_files(&args.files, &args.messages)?;
+    crate::cli::check_topics_in_files(&args.files, &messages)?;
     crate::cli::output_folder(&args.output)?;
     let total: u64 = args
         .files
@@ -114,7 +115,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
                     if n == 1 { "file" } else { "files" },
                     c.metadata.display()
                 )?;
-                for line in c.lines(&args.messages, &window) {
+                for line in c.lines(&messages, &window) {
                     eprintln!("ulog: {}: {line}", path.display());
                 }
                 topics_seen.extend(c.files.iter().map(|f| f.topic.clone()));
@@ -129,7 +130,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         }
     }
     // Topics some log defines but none has rows of (in the window).
-    for topic in args.messages.iter().filter(|t| !topics_seen.contains(*t)) {
+    for topic in messages.iter().filter(|t| !topics_seen.contains(*t)) {
         eprintln!(
             "ulog: no log has rows of topic `{topic}`{}",
             window.in_words()
