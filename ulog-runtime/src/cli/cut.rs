@@ -37,8 +37,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     crate::cli::check_path(&args.file, false)?;
     let topics: Vec<String> = messages.iter().chain(&exclude).cloned().collect();
     crate::cli::check_topics_in_files(std::slice::from_ref(&args.file), &topics)?;
-    let both: Vec<&str> = args
-        .messages
+    let both: Vec<&str> = messages
         .iter()
         .filter(|t| exclude.contains(t))
         .map(String::as_str)
