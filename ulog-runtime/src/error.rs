@@ -67,9 +67,32 @@ pub struct Diagnostic {
     pub kind: DiagnosticKind,
 }
 
+/// The text of what the log says (names, definitions) with its control characters written as
+/// escapes (`\u{0}` for a NUL of a damaged definition, `\n`, `\u{1b}`): so that what a
+/// damaged log makes a reader say stays one printable line.
+pub(crate) fn printable(text: &str) -> std::borrow::Cow<'_, str> {
+    if text.chars().any(char::is_control) {
+        text.chars()
+            .map(|c| {
+                if c.is_control() {
+                    c.escape_default().to_string()
+                } else {
+                    c.to_string()
+                }
+            })
+            .collect::<String>()
+            .into()
+    } else {
+        text.into()
+    }
+}
+
+/// `at byte N: what`, the log's text in it with its control characters escaped (a NUL as
+/// `\u{0}`); the kind's fields keep the text as read.
 impl fmt::Display for Diagnostic {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "at byte {}: {}", self.offset, self.kind)
+        let what = self.kind.to_string();
+        write!(f, "at byte {}: {}", self.offset, printable(&what))
     }
 }
 

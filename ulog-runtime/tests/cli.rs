@@ -1428,7 +1428,7 @@ fn a_window_no_row_can_lie_in_is_refused_and_an_empty_one_is_named() {
     assert!(csv.status.success(), "{err}");
     assert!(
         err.contains(&format!(
-            "{window} (the log's rows run from 3723 s to 3724.000001 s)"
+            "{window} (their rows run from 3723 s to 3724.000001 s)"
         )),
         "{err}"
     );

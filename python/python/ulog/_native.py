@@ -227,13 +227,16 @@ class Log:
         if table.num_rows == 0 and (start is not None or end is not None):
             # As `ulog csv` says it: a window none of the instance's rows lie in (seconds
             # where microseconds were meant, say) is said, with where the rows lie.
-            spans = [
-                (t["first_timestamp"], t["last_timestamp"])
-                for t in self.topics()
-                if t["name"] == topic and t["multi_id"] == multi_id
-            ]
-            if spans:
-                first, last = min(spans[0]), max(spans[0])
+            span = next(
+                (
+                    (t["first_timestamp"], t["last_timestamp"])
+                    for t in self.topics()
+                    if t["name"] == topic and t["multi_id"] == multi_id
+                ),
+                None,
+            )
+            if span is not None:
+                first, last = min(span), max(span)
                 warnings.warn(
                     f"no row of `{topic}` #{multi_id} lies{_ulog.window_words(start, end)} "
                     f"(its rows run from {_seconds(first)} s to {_seconds(last)} s)",

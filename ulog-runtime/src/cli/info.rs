@@ -222,7 +222,7 @@ fn info(log: &Log<'_>, file: &Path, verbose: bool, out: &mut impl Write) -> Resu
         )?;
         if verbose {
             for d in log.diagnostics() {
-                writeln!(out, "  {}", crate::cli::printable(&d.to_string()))?;
+                writeln!(out, "  {d}")?;
             }
         }
     }

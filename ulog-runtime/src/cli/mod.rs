@@ -207,7 +207,7 @@ pub(crate) fn report_rewrite(
 }
 
 /// Says on stderr that rows were asked for in a window and none lay in it (the output has
-/// no rows), with the time span of the log's rows when it is known (first and last row,
+/// no rows), with the time span of those topics' rows when it is known (first and last row,
 /// µs), so that an empty output is never silent.
 pub(crate) fn report_empty_window(
     file: &Path,
@@ -216,7 +216,7 @@ pub(crate) fn report_empty_window(
 ) {
     let span = span_us.map_or(String::new(), |(a, b)| {
         format!(
-            " (the log's rows run from {} s to {} s)",
+            " (their rows run from {} s to {} s)",
             a as f64 / 1e6,
             b as f64 / 1e6
         )
@@ -304,31 +304,11 @@ pub(crate) fn pyulog_warnings(log: &Log<'_>, out: &mut impl Write) -> Result<(),
     Ok(())
 }
 
-/// Text from a log with its control characters written as escapes (`\u{0}` for a NUL of a
-/// damaged definition, `\n`, `\u{1b}`), so that what a damaged log says stays one
-/// printable line.
-pub(crate) fn printable(text: &str) -> std::borrow::Cow<'_, str> {
-    if text.chars().any(char::is_control) {
-        text.chars()
-            .map(|c| {
-                if c.is_control() {
-                    c.escape_default().to_string()
-                } else {
-                    c.to_string()
-                }
-            })
-            .collect::<String>()
-            .into()
-    } else {
-        text.into()
-    }
-}
-
 /// Says on stderr the damage the reader skipped, for the verbs that mirror a pyulog tool:
 /// their output is what this reader recovers, and a damaged log is never silent.
 pub(crate) fn report_damage(log: &Log<'_>, file: &Path) {
     for line in log.skipped().damage_lines() {
-        eprintln!("ulog: {}: {}", file.display(), printable(&line));
+        eprintln!("ulog: {}: {line}", file.display());
     }
 }
 

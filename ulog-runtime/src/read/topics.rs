@@ -218,19 +218,22 @@ impl Skipped {
     /// What was left out, a line each, as the exports say it (`ulog csv`, `ulog parquet`,
     /// `ulog json` on stderr, Python's `to_parquet` as warnings): unreadable topics and rows
     /// that do not fit, of `topics` only (all if empty); rows of no subscription (when
-    /// `topics` is empty); damaged bytes; appended data not read.
+    /// `topics` is empty); damaged bytes; appended data not read. The log's text in them
+    /// (topic names, why a topic cannot be read) has its control characters escaped.
     pub fn lines(&self, topics: &[String]) -> Vec<String> {
         let wanted = |t: &str| topics.is_empty() || topics.iter().any(|w| w == t);
         let plural = |n: usize| if n == 1 { "" } else { "s" };
         let mut out = Vec::new();
         for (topic, msg_id, why) in self.unreadable_topics.iter().filter(|t| wanted(&t.0)) {
-            out.push(format!("skipped topic `{topic}` (msg_id {msg_id}): {why}"));
+            let line = format!("skipped topic `{topic}` (msg_id {msg_id}): {why}");
+            out.push(crate::error::printable(&line).into_owned());
         }
         for (topic, multi_id, rows) in self.misfit_rows.iter().filter(|t| wanted(&t.0)) {
-            out.push(format!(
+            let line = format!(
                 "skipped {rows} row{} of `{topic}` #{multi_id} whose size does not fit the format",
                 plural(*rows)
-            ));
+            );
+            out.push(crate::error::printable(&line).into_owned());
         }
         if self.orphan_rows > 0 && topics.is_empty() {
             out.push(format!(
@@ -475,5 +478,32 @@ mod tests {
             ["2 damaged bytes skipped (`ulog info -v` lists where)"]
         );
         assert!(line(0).is_empty());
+    }
+
+    #[test]
+    fn what_a_damaged_log_makes_the_reader_say_has_no_control_characters() {
+        // A type name zeroed in a definition: the reason and the diagnostic print it
+        // escaped, the data keeps it as read.
+        let why = "t.x: type `f\0\0` is not a basic type".to_owned();
+        let skipped = Skipped {
+            unreadable_topics: vec![("t\n".to_owned(), 3, why.clone())],
+            ..Skipped::default()
+        };
+        assert_eq!(
+            skipped.lines(&[]),
+            ["skipped topic `t\\n` (msg_id 3): t.x: type `f\\u{0}\\u{0}` is not a basic type"]
+        );
+        assert_eq!(skipped.unreadable_topics[0].2, why);
+        let d = crate::Diagnostic {
+            offset: 59,
+            kind: crate::DiagnosticKind::MissingTimestamp {
+                topic: "a\u{1b}b".to_owned(),
+            },
+        };
+        assert_eq!(
+            d.to_string(),
+            "at byte 59: topic `a\\u{1b}b` has no unsigned integer `timestamp` field; its rows \
+             get timestamp 0"
+        );
     }
 }
