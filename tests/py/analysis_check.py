@@ -174,15 +174,20 @@ def check_battery(battery, data, checks):
         what = f"battery#{inst['multi_id']}"
         checks.same(what + " min_voltage_v", inst["min_voltage_v"], v.min() if len(v) else None)
         cname = "current_a" if "current_a" in b else "current_filtered_a"
+        currents = 0
         if cname in b:
             c = finite(b[cname])
             c = c[c >= 0]
+            currents = len(c)
             checks.same(what + " max_current_a", inst["max_current_a"], c.max() if len(c) else None)
             checks.same(what + " avg_current_a", inst["avg_current_a"], c.mean() if len(c) else None)
         if "discharged_mah" in b:
             d = finite(b["discharged_mah"])
             d = d[d >= 0]
-            checks.same(what + " discharged_mah", inst["discharged_mah"], d[-1] if len(d) else None)
+            # PX4 integrates the charge from the current: without a valid current reading
+            # it is unknown.
+            expected = d[-1] if len(d) and currents else None
+            checks.same(what + " discharged_mah", inst["discharged_mah"], expected)
 
 
 def check_gps(quality, data, checks):

@@ -317,7 +317,10 @@ impl Sensors {
                 multi_id: *m,
                 avg_current_a: (b.current_n > 0).then(|| b.current_sum / b.current_n as f64),
                 max_current_a: b.max_current,
-                discharged_mah: b.discharged,
+                // PX4 integrates the charge drawn from the current: with no current
+                // reading (a battery without a current sensor writes -1 and a charge of
+                // 0 throughout), the charge is unknown, not 0.
+                discharged_mah: b.discharged.filter(|_| b.current_n > 0),
                 min_voltage_v: b.min_voltage,
                 cells: Sensors::cells(meta, *m, b),
             })

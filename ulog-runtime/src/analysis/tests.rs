@@ -114,6 +114,9 @@ pub(crate) struct Faults {
     pub(crate) ground_spin: bool,
     /// The position innovation failing from 45 s to the end of the log (past the landing).
     pub(crate) ekf_to_the_end: bool,
+    /// A battery without a current sensor: current -1 ("unknown") and a charge drawn of 0
+    /// throughout, as PX4 writes them.
+    pub(crate) no_current_sensor: bool,
 }
 
 const S: u64 = 1_000_000;
@@ -195,8 +198,18 @@ pub(crate) fn flight(faults: Faults) -> Vec<u8> {
                 &BatteryStatus {
                     timestamp: t,
                     voltage_v: v as f32,
-                    current_a: if flying { 10.0 } else { 0.5 },
-                    discharged_mah: (ts * 50.0) as f32,
+                    current_a: if faults.no_current_sensor {
+                        -1.0
+                    } else if flying {
+                        10.0
+                    } else {
+                        0.5
+                    },
+                    discharged_mah: if faults.no_current_sensor {
+                        0.0
+                    } else {
+                        (ts * 50.0) as f32
+                    },
                 },
             )
             .unwrap();
@@ -441,6 +454,30 @@ fn a_normal_flight_reports_its_facts_and_nothing_wrong() {
         .find(|s| s.sensor == "gyro" && s.axis == "x")
         .unwrap();
     assert_eq!(gyro_x.sample_rate_hz, 200.0);
+}
+
+/// A battery without a current sensor (current -1, a charge of 0 throughout): its current
+/// and charge drawn are unknown, in the facts and in the summary, not "0.00 mAh"; its
+/// voltage is still read, and it makes no diagnostic.
+#[test]
+fn a_battery_without_a_current_sensor_has_no_charge_drawn() {
+    let a = analysis(Faults {
+        no_current_sensor: true,
+        ..Faults::default()
+    });
+    let b = &a.battery;
+    assert_eq!(
+        (b.avg_current_a, b.max_current_a, b.discharged_mah),
+        (None, None, None)
+    );
+    assert_eq!(b.instances[0].discharged_mah, None);
+    assert!((b.min_voltage_v.unwrap() - 15.2).abs() < 0.05);
+    assert!(a.diagnostics.is_empty(), "{:#?}", a.diagnostics);
+    let text = a.to_string();
+    assert!(text.contains("current mean - max -, drawn -, 4S"), "{text}");
+    // With a current sensor, the same flight's charge is the last reading.
+    let with = analysis(Faults::default());
+    assert!((with.battery.discharged_mah.unwrap() - 2995.0).abs() < 0.01);
 }
 
 /// The one diagnostic a fault makes: its id, severity, start and end (µs, to 0.2 s).
