@@ -1221,6 +1221,69 @@ fn info_lists_a_damaged_definition_in_printable_text() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `info`'s rate column: a sparse topic's rate to three significant digits (one decimal
+/// showed 0.0 Hz), and `-` for rows that span no time (one row, or two at one time), where
+/// 0.0 Hz was shown.
+#[test]
+fn info_shows_a_sparse_topics_rate_and_none_for_rows_at_one_time() {
+    use ulog_runtime::read::{FileHeader, Message};
+    let mut bytes = FileHeader {
+        version: 1,
+        start_timestamp: 0,
+    }
+    .to_bytes()
+    .to_vec();
+    let mut put = |m: Message<'_>| m.encode(&mut bytes).unwrap();
+    // Rows at these seconds: 3 rows over 120 s (2 intervals: 1/60 Hz), one row, two rows at
+    // one time, and 11 rows over 1 s.
+    let topics: [(&[u8], &[u64]); 4] = [
+        (b"sparse", &[0, 60, 120]),
+        (b"once", &[5]),
+        (b"same", &[7, 7]),
+        (b"fast", &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10]),
+    ];
+    for (i, (name, _)) in topics.iter().enumerate() {
+        let mut format = name.to_vec();
+        format.extend_from_slice(b":uint64_t timestamp;");
+        put(Message::Format(&format));
+        put(Message::Subscribe {
+            multi_id: 0,
+            msg_id: i as u16,
+            name,
+        });
+    }
+    for (i, (name, times)) in topics.iter().enumerate() {
+        for &t in *times {
+            // `fast` in tenths of a second, the others in seconds.
+            let us = if *name == b"fast" {
+                t * 100_000
+            } else {
+                t * 1_000_000
+            };
+            put(Message::Data {
+                msg_id: i as u16,
+                data: &us.to_le_bytes(),
+            });
+        }
+    }
+    let dir = temp_dir("rates");
+    let log = dir.join("rates.ulg");
+    std::fs::write(&log, &bytes).unwrap();
+    let text = stdout(&["info", log.to_str().unwrap()]);
+    let cells = |topic: &str| -> Vec<String> {
+        let line = text
+            .lines()
+            .find(|l| l.split_whitespace().next() == Some(topic))
+            .unwrap_or_else(|| panic!("no line of `{topic}`:\n{text}"));
+        line.split_whitespace().skip(6).map(str::to_owned).collect()
+    };
+    assert_eq!(cells("sparse"), ["0.0167", "120.0"], "{text}");
+    assert_eq!(cells("once"), ["-", "0.0"], "{text}");
+    assert_eq!(cells("same"), ["-", "0.0"], "{text}");
+    assert_eq!(cells("fast"), ["10.0", "1.0"], "{text}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn info_names_a_version_1_file_without_flag_bits_and_an_absolute_start() {
     use ulog_runtime::read::{FileHeader, Message};

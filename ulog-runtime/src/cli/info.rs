@@ -287,23 +287,35 @@ fn info(log: &Log<'_>, file: &Path, verbose: bool, out: &mut impl Write) -> Resu
             (a.min(r.timestamp), b.max(r.timestamp))
         });
         let span = last.saturating_sub(first) as f64 / 1e6;
-        let rate = if span > 0.0 {
-            (n - 1) as f64 / span
-        } else {
-            0.0
-        };
         writeln!(
             out,
-            " {:<40} {:>5} {:>6} {:>9} {:>11} {:>6} {:>9.1} {:>10.1}",
+            " {:<40} {:>5} {:>6} {:>9} {:>11} {:>6} {:>9} {:>10.1}",
             sub.name,
             sub.multi_id,
             size,
             n,
             size * n,
             sub.msg_id,
-            rate,
+            rate_cell(n, span),
             span
         )?;
     }
     Ok(())
+}
+
+/// A topic's rate for the table, from its `rows` over `span` seconds: one decimal, or three
+/// significant digits below 0.05 Hz (which one decimal shows as 0.0: a topic written once a
+/// minute is 0.0167 Hz); `-` when its rows span no time (one row, or all at one time).
+fn rate_cell(rows: usize, span: f64) -> String {
+    if rows < 2 || span <= 0.0 {
+        return "-".to_owned();
+    }
+    let rate = (rows - 1) as f64 / span;
+    if rate >= 0.05 {
+        format!("{rate:.1}")
+    } else {
+        // Digits after the point for three significant ones (at most 9, the column's width).
+        let decimals = (2 - rate.log10().floor() as i32).clamp(0, 9) as usize;
+        format!("{rate:.decimals$}")
+    }
 }
