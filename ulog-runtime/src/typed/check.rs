@@ -236,9 +236,43 @@ fn check_format(
                 would_widen,
             },
         };
+        // A nested struct whose format name is not the file's: said with the name to give it.
+        let misnamed = match (field.kind, file_field.kind) {
+            (TypedKind::Nested(inner), FieldKind::Nested(inner_id))
+                if schema.format(inner_id).name != inner.name =>
+            {
+                Some(Mismatch {
+                    path: path.clone(),
+                    kind: MismatchKind::NestedName {
+                        file: file_type(schema, file_field.kind, file_field.array_len),
+                        rust: field.rust_type.to_owned(),
+                        rust_struct: tf.rust_type,
+                        nested_struct: inner.rust_type,
+                        nested_name: inner.name,
+                        file_name: schema.format(inner_id).name.clone(),
+                    },
+                })
+            }
+            _ => None,
+        };
+        if let Some(m) = misnamed {
+            if !exact_differs {
+                out.push(m);
+            }
+            fields.push(FieldPlan::ABSENT);
+            continue;
+        }
         if file_field.array_len != field.array_len {
             if !exact_differs {
                 out.push(type_mismatch());
+                // The nested format's own differences too, so that every difference is
+                // said at once (not one more after the length is fixed).
+                if let (TypedKind::Nested(inner), FieldKind::Nested(inner_id)) =
+                    (field.kind, file_field.kind)
+                {
+                    let prefix = format!("{path}[].");
+                    check_format(inner, inner_id, schema, &prefix, out);
+                }
             }
             fields.push(FieldPlan::ABSENT);
             continue;
@@ -349,6 +383,22 @@ pub enum MismatchKind {
         /// The struct.
         rust_struct: &'static str,
     },
+    /// A nested struct whose format name is not the file's nested format's (formats are
+    /// matched by name: `#[ulog(name = "...")]` on the nested struct gives it the file's).
+    NestedName {
+        /// The file's type, as a format string spells it (`esc_report[8]`).
+        file: String,
+        /// The struct field's Rust type (`[Motor; 8]`).
+        rust: String,
+        /// The struct that has the field.
+        rust_struct: &'static str,
+        /// The nested struct.
+        nested_struct: &'static str,
+        /// The nested struct's format name (`motor`).
+        nested_name: &'static str,
+        /// The file's nested format name (`esc_report`).
+        file_name: String,
+    },
     /// The file's nested format has no valid layout.
     Invalid {
         /// The nested format.
@@ -400,6 +450,19 @@ impl fmt::Display for Mismatch {
                 let text = difference.describe("the file", &format!("struct {rust_struct}"));
                 write!(f, "{at}exact mode: {text}")
             }
+            MismatchKind::NestedName {
+                file,
+                rust,
+                rust_struct,
+                nested_struct,
+                nested_name,
+                file_name,
+            } => write!(
+                f,
+                "{path} is {file} in the file, {rust} in struct {rust_struct}: struct \
+                 {nested_struct} is format `{nested_name}`, the file's is `{file_name}` \
+                 (`#[ulog(name = \"{file_name}\")]` on struct {nested_struct} names it so)"
+            ),
             MismatchKind::Invalid { type_name } => write!(
                 f,
                 "{path}: the file's format `{type_name}` has no valid layout"

@@ -137,6 +137,36 @@ fn fields_match_by_name_whatever_the_order_and_padding() {
     assert_eq!((got.esc[1].esc_rpm, got.esc[1].esc_voltage), (-20, 4.5));
 }
 
+/// A nested struct named otherwise than the file's nested format.
+#[derive(ULog, Debug, Clone, Copy, PartialEq, Default)]
+struct Motor {
+    esc_rpm: i32,
+}
+
+#[derive(ULog, Debug, Clone, PartialEq)]
+#[ulog(name = "esc_status")]
+struct MotorStatus {
+    timestamp: u64,
+    esc: [Motor; 2],
+}
+
+/// A nested struct whose format name is not the file's: the error says both names and the
+/// attribute that gives the file's, rather than only that the types differ.
+#[test]
+fn a_nested_struct_of_another_name_is_told_the_files_name() {
+    let s = schema(&[
+        "esc_status:uint64_t timestamp;esc_report[2] esc;",
+        "esc_report:int32_t esc_rpm;",
+    ]);
+    let err = TypedDecoder::<MotorStatus>::new(&s).unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "esc_status: esc is esc_report[2] in the file, [Motor; 2] in struct MotorStatus: struct Motor is \
+         format `motor`, the file's is `esc_report` (`#[ulog(name = \"esc_report\")]` on \
+         struct Motor names it so)"
+    );
+}
+
 #[test]
 fn a_mismatch_names_the_topic_every_path_and_both_sides() {
     let s = schema(&[
@@ -146,9 +176,10 @@ fn a_mismatch_names_the_topic_every_path_and_both_sides() {
     let err = TypedDecoder::<EscStatus>::new(&s).unwrap_err();
     assert_eq!(
         err.to_string(),
-        "esc_status: 2 differences between the file and struct EscStatus:\n  \
+        "esc_status: 3 differences between the file and struct EscStatus:\n  \
          esc_count is uint16_t in the file, u8 in struct EscStatus\n  \
-         esc is esc_report[4] in the file, [EscReport; 2] in struct EscStatus"
+         esc is esc_report[4] in the file, [EscReport; 2] in struct EscStatus\n  \
+         esc[].esc_rpm is float in the file, i32 in struct EscReport"
     );
     // `?` in `main` prints `Debug`: the same text, one difference per line.
     assert_eq!(format!("{err:?}"), err.to_string());
