@@ -3,9 +3,9 @@
 /// Status of the ESCs.
 /// One report per ESC.
 ///
-/// `ULog` format `esc_status`, from `codegen/nested.toml:3`:
+/// `ULog` format `esc_status`, from `codegen/nested.toml:4`:
 /// `esc_status:uint64_t timestamp;uint8_t esc_count;esc_report[4] esc;health health;`
-#[derive(::ulog_runtime::ULog, Debug, Clone, PartialEq)]
+#[derive(::ulog_runtime::ULog, Debug, Clone, PartialEq, Copy)]
 #[ulog(name = "esc_status", crate = "::ulog_runtime")]
 pub struct EscStatus {
     /// Microseconds since boot.
@@ -24,9 +24,9 @@ pub struct EscStatus {
 
 /// One ESC.
 ///
-/// `ULog` format `esc_report`, from `codegen/nested.toml:13`:
+/// `ULog` format `esc_report`, from `codegen/nested.toml:15`:
 /// `esc_report:int32_t esc_rpm;float esc_voltage;char[6] esc_label;`
-#[derive(::ulog_runtime::ULog, Debug, Clone, PartialEq)]
+#[derive(::ulog_runtime::ULog, Debug, Clone, PartialEq, Copy)]
 #[ulog(name = "esc_report", crate = "::ulog_runtime")]
 pub struct EscReport {
     /// `int32_t esc_rpm`
@@ -41,7 +41,7 @@ pub struct EscReport {
 
 /// `ULog` format `health`, from `format string #1`:
 /// `health:uint8_t level;uint8_t[3] _padding0;float temperature;`
-#[derive(::ulog_runtime::ULog, Debug, Clone, PartialEq)]
+#[derive(::ulog_runtime::ULog, Debug, Clone, PartialEq, Copy)]
 #[ulog(name = "health", crate = "::ulog_runtime")]
 #[allow(clippy::pub_underscore_fields)]
 pub struct Health {

@@ -150,6 +150,7 @@ pub(crate) fn render(
         global_derives.push(parse::<syn::Path>("derive", d)?);
     }
     let names = names(defs);
+    let derives = inherited_derives(defs);
     let mut items = Vec::new();
     for def in defs {
         let item = one_type(
@@ -159,7 +160,7 @@ pub(crate) fn render(
             &names,
             &krate,
             &vis,
-            &global_derives,
+            (&derives[def.format.name.as_str()], &global_derives),
         )?;
         if builder.module_per_topic {
             let module = format_ident!("{}", names.modules[&def.format.name]);
@@ -191,6 +192,39 @@ pub(crate) fn render(
     Ok(out)
 }
 
+/// Each type's extra derives: its own, and those of every type that nests it, however
+/// deep (a derive such as `Copy` or `Eq` holds only if the fields' types have it too).
+fn inherited_derives(defs: &[Definition]) -> HashMap<&str, Vec<String>> {
+    let mut derives: HashMap<&str, Vec<String>> = defs
+        .iter()
+        .map(|d| (d.format.name.as_str(), d.derives.clone()))
+        .collect();
+    // Handed down one level a round, until no type gains one (each round adds at least one
+    // derive to a type, so the rounds are bounded by the types times their derives).
+    loop {
+        let mut changed = false;
+        for def in defs {
+            let from = derives[def.format.name.as_str()].clone();
+            for field in &def.format.fields {
+                let TypeRef::Nested(inner) = &field.ty else {
+                    continue;
+                };
+                if let Some(to) = derives.get_mut(inner.as_str()) {
+                    for d in &from {
+                        if !to.contains(d) {
+                            to.push(d.clone());
+                            changed = true;
+                        }
+                    }
+                }
+            }
+        }
+        if !changed {
+            return derives;
+        }
+    }
+}
+
 #[allow(clippy::too_many_arguments)]
 fn one_type(
     builder: &Builder,
@@ -199,7 +233,7 @@ fn one_type(
     names: &Names,
     krate: &syn::Path,
     vis: &syn::Visibility,
-    global_derives: &[syn::Path],
+    (own_derives, global_derives): (&[String], &[syn::Path]),
 ) -> Result<TokenStream, CodegenError> {
     let format = &def.format;
     let ident = Ident::new(&names.types[&format.name], Span::call_site());
@@ -243,7 +277,7 @@ fn one_type(
     let mut derives: Vec<syn::Path> = Vec::new();
     let mut seen: Vec<String> = ["Debug", "Clone", "PartialEq"].map(String::from).to_vec();
     let mut extra = Vec::new();
-    for d in &def.derives {
+    for d in own_derives {
         extra.push(parse::<syn::Path>("derive", d)?);
     }
     for path in extra.into_iter().chain(global_derives.iter().cloned()) {

@@ -42,7 +42,7 @@
 //! [[topic]]
 //! name = "esc_status"                # the format name
 //! doc = "Status of the ESCs."        # optional: doc comment of the struct
-//! derives = ["PartialEq"]            # optional: extra derives for this type
+//! derives = ["Copy"]                 # optional: extra derives for this type (and the types it nests)
 //! exact = false                      # optional: #[ulog(exact)]
 //! fields = [
 //!   { name = "timestamp", type = "uint64_t", doc = "Microseconds since boot." },
