@@ -240,6 +240,27 @@ pub(crate) fn read_log(
     })?;
     let schema = log.metadata().schema();
     let place = Place::Log(path.to_owned());
+    // A damaged log (cut short, say) may lack the formats its formats nest: say so, rather
+    // than that no input defines them.
+    if let Some(first) = log.diagnostics().first() {
+        for f in schema.formats() {
+            for field in &f.fields {
+                if let TypeRef::Nested(n) = &field.ty
+                    && schema.get(n).is_none()
+                {
+                    return Err(CodegenError::Log {
+                        path: path.to_owned(),
+                        error: format!(
+                            "format `{}` nests `{n}`, which the log does not define: the log \
+                             is damaged ({} problem(s), the first {first})",
+                            f.name,
+                            log.diagnostics().len()
+                        ),
+                    });
+                }
+            }
+        }
+    }
     // A log may hold formats outside the grammar (the reader keeps them, lax): no Rust
     // type can be named after them.
     let in_grammar = |f: &Format| -> Result<(), CodegenError> {

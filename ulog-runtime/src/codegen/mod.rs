@@ -174,7 +174,7 @@ pub enum CodegenError {
         /// Which inputs have which type.
         usage: String,
     },
-    /// A log that cannot be read.
+    /// A log that cannot be read, or too damaged to define the types its formats nest.
     #[error("{}: {error}", path.display())]
     Log {
         /// The log.

@@ -373,3 +373,30 @@ fn a_topic_a_log_lacks_suggests_the_closest_it_has() {
     );
     std::fs::remove_file(&path).unwrap();
 }
+
+/// A log cut short inside its definitions, after a format and before the format it nests:
+/// the error says the log is damaged and where, not that no input defines the nested type.
+#[test]
+fn a_log_cut_before_a_nested_format_says_it_is_damaged() {
+    let mut w = crate::Writer::new(Vec::new(), crate::WriterOptions::default()).unwrap();
+    w.format("fence:uint64_t timestamp;fence_vertex[2] vertices;")
+        .unwrap();
+    w.format("fence_vertex:float lat;float lon;").unwrap();
+    let bytes = w.into_inner();
+    // The last format message (3 header bytes and 33 of text) loses its last 10 bytes.
+    let cut = bytes.len() - 10;
+    let path = std::env::temp_dir().join(format!("ulog-codegen-cut-{}.ulg", std::process::id()));
+    std::fs::write(&path, &bytes[..cut]).unwrap();
+    let err = Builder::new().ulog(&path).types().unwrap_err();
+    let start = cut - 26;
+    assert_eq!(
+        err.to_string(),
+        format!(
+            "{}: format `fence` nests `fence_vertex`, which the log does not define: the log is \
+             damaged (1 problem(s), the first at byte {start}: message cut short: 33 payload \
+             bytes declared, 23 available; dropped)",
+            path.display()
+        )
+    );
+    std::fs::remove_file(&path).unwrap();
+}
