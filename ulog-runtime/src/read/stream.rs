@@ -251,14 +251,34 @@ impl<R: Read> StreamReader<R> {
     /// }
     /// # Ok(()) }
     /// ```
+    ///
+    /// Made before the definitions are all read, without the format among those read so far,
+    /// it fails with [`TypedError::DefinitionsNotRead`].
     pub fn typed<T: Topic>(&self) -> Result<TypedDecoder<T>, TypedError> {
-        TypedDecoder::new(self.metadata().schema())
+        TypedDecoder::new(self.metadata().schema()).map_err(|e| self.too_early(e))
     }
 
     /// [`StreamReader::typed`] for the topic named `topic`, read as `T` (one type for the
     /// topics that share a layout: see [`Log::topic_as`](crate::Log::topic_as)).
     pub fn typed_as<T: Topic>(&self, topic: &str) -> Result<TypedDecoder<T>, TypedError> {
-        TypedDecoder::new_as(self.metadata().schema(), topic)
+        TypedDecoder::new_as(self.metadata().schema(), topic).map_err(|e| self.too_early(e))
+    }
+
+    /// A format not found while the definitions are still being read (and more may come):
+    /// said so.
+    fn too_early(&self, e: TypedError) -> TypedError {
+        match e {
+            TypedError::NoSuchTopic {
+                topic, rust_type, ..
+            } if !self.walker.meta.in_data_section() && !self.eof => {
+                TypedError::DefinitionsNotRead {
+                    topic,
+                    rust_type,
+                    read: self.metadata().schema().formats().len(),
+                }
+            }
+            e => e,
+        }
     }
 
     /// Calls `f` with every event to the end of the file: what a loop over

@@ -485,6 +485,21 @@ pub enum TypedError {
         /// The file's format names closest to `topic` (at most 3, closest first).
         suggestions: Vec<String>,
     },
+    /// A stream's definitions are not all read yet, and none read so far is the format
+    /// ([`StreamReader::typed`](crate::StreamReader::typed) called too early).
+    #[error(
+        "no format `{topic}` (wanted by struct {rust_type}) among the {read} read so far: the \
+         stream's definitions are not all read yet (make the decoder at the topic's \
+         `Event::Subscription`, or after `StreamReader::read_definitions`)"
+    )]
+    DefinitionsNotRead {
+        /// The topic.
+        topic: String,
+        /// The struct.
+        rust_type: &'static str,
+        /// The formats read so far.
+        read: usize,
+    },
     /// The file defines the format but never subscribes to it.
     #[error("`{topic}` is defined in the file but was never logged (no subscription)")]
     NotLogged {

@@ -719,3 +719,52 @@ fn chars_from_text_checked_or_cut_at_a_character() {
     assert_eq!(Chars::<5>::from("abcé").as_str(), Ok("abcé"));
     assert_eq!(format!("{}", Chars::<8>::from("rover")), "rover");
 }
+
+/// A stream's decoder made before the topic's format is read says the definitions are not
+/// all read yet (not that the file lacks the format); made at the topic's subscription, it
+/// works; and a topic the file lacks is still "the file has no format" once the definitions
+/// are read.
+#[test]
+fn a_streams_decoder_made_too_early_says_the_definitions_are_not_read() {
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    w.format("other:uint64_t timestamp;").unwrap();
+    let sub = w.topic::<EscStatus>(0).unwrap();
+    let status = EscStatus {
+        timestamp: 5,
+        esc_count: 2,
+        esc: [EscReport::default(); 2],
+        _pad: [0; 7],
+    };
+    w.write(&sub, &status).unwrap();
+    let bytes = w.into_inner();
+    let mut reader = StreamReader::new(&bytes[..]).unwrap();
+    // The first definition only: `other`.
+    while reader.metadata().schema().formats().is_empty() {
+        reader.next_event().unwrap().expect("a definition");
+    }
+    let err = reader.typed::<EscStatus>().unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "no format `esc_status` (wanted by struct EscStatus) among the 1 read so far: the \
+         stream's definitions are not all read yet (make the decoder at the topic's \
+         `Event::Subscription`, or after `StreamReader::read_definitions`)"
+    );
+    let mut decoded = Vec::new();
+    let mut decoder = None;
+    while let Some(event) = reader.next_event().unwrap() {
+        match event {
+            Event::Subscription(s) if s.name == "esc_status" => {
+                decoder = Some(reader.typed::<EscStatus>().unwrap());
+                let err = reader.typed::<VehicleGpsPosition>().unwrap_err();
+                assert_eq!(
+                    err.to_string(),
+                    "the file has no format `vehicle_gps_position` (wanted by struct \
+                     VehicleGpsPosition)"
+                );
+            }
+            Event::Row(row) => decoded.extend(decoder.as_ref().unwrap().decode_row(&row)),
+            _ => {}
+        }
+    }
+    assert_eq!(decoded, [status]);
+}
