@@ -56,23 +56,9 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         .exclude(&exclude)
         .run_file(&args.file, &args.output)
         .map_err(|e| crate::cli::rewrite_failure(&args.file, e))?;
-    // Rows of the topics kept, read and written: none written of some read is the window's
-    // doing.
-    let (rows_in, rows_out) = report
-        .topics
-        .iter()
-        .filter(|t| t.kept)
-        .fold((0, 0), |(a, b), t| (a + t.rows_in, b + t.rows_out));
-    if window.is_bounded() && rows_in > 0 && rows_out == 0 {
-        // Where the rows of the topics kept lie (as `ulog csv` says it).
-        let spans = report
-            .topics
-            .iter()
-            .filter(|t| t.kept)
-            .filter_map(|t| t.span_in);
-        let first = spans.clone().map(|(a, _)| a).min();
-        let last = spans.map(|(_, b)| b).max();
-        crate::cli::report_empty_window(&args.file, &window, first.zip(last));
+    // Where the rows of the topics kept lie, when the window has none (as `ulog csv` says it).
+    if let Some(span) = report.window_missed() {
+        crate::cli::report_empty_window(&args.file, &window, Some(span));
     }
     crate::cli::report_rewrite(&report, &args.output, out)
 }

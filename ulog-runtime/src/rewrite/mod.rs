@@ -275,6 +275,8 @@ pub struct Report {
     pub anonymized: Option<anonymize::Anonymized>,
     /// What the reader skipped of the input (damage, unknown messages): not in the output.
     pub skipped: Skipped,
+    /// The window asked for (none: every row).
+    pub window: Window,
 }
 
 /// The output: messages encoded into one buffer, written whole.
@@ -535,6 +537,7 @@ impl Rewrite {
         let start_timestamp = self.anonymize.as_ref().map_or(header.start_timestamp, |a| {
             a.header_start(header.start_timestamp)
         });
+        let window = self.window;
         let mut pass = Pass {
             rules: self,
             out: Output {
@@ -543,7 +546,10 @@ impl Rewrite {
                 bytes: 0,
                 in_data: false,
             },
-            report: Report::default(),
+            report: Report {
+                window,
+                ..Report::default()
+            },
             held: Vec::new(),
             flushed: false,
             flag_bits: false,
@@ -1137,6 +1143,23 @@ impl Report {
             .iter()
             .fold((0, 0), |(a, b), t| (a + t.rows_in, b + t.rows_out))
     }
+
+    /// When the window left out every row of the topics kept, though they have rows: where
+    /// those rows lie, their smallest and largest timestamp (µs). A window given in the
+    /// wrong clock (seconds since boot for a log whose timestamps are dates) shows here.
+    pub fn window_missed(&self) -> Option<(u64, u64)> {
+        let kept = self.topics.iter().filter(|t| t.kept);
+        let (rows_in, rows_out) = kept
+            .clone()
+            .fold((0, 0), |(a, b), t| (a + t.rows_in, b + t.rows_out));
+        if !self.window.is_bounded() || rows_in == 0 || rows_out > 0 {
+            return None;
+        }
+        let spans = kept.filter_map(|t| t.span_in);
+        let first = spans.clone().map(|(a, _)| a).min()?;
+        let last = spans.map(|(_, b)| b).max()?;
+        Some((first, last))
+    }
 }
 
 /// What a rewrite did, in lines for people: the bytes, every topic instance that lost or
@@ -1155,6 +1178,16 @@ impl std::fmt::Display for Report {
             "rows: {rows_out} of {rows_in} written, {} topic instances",
             self.topics.len()
         )?;
+        if let Some((first, last)) = self.window_missed() {
+            writeln!(
+                f,
+                "  no row of the topics kept lies in the window {}: their rows run from {} s \
+                 to {} s",
+                self.window,
+                first as f64 / 1e6,
+                last as f64 / 1e6
+            )?;
+        }
         // One line per instance partly written or changed; those left out whole are
         // counted in one line (and named under "subscriptions not written").
         let (mut none, mut none_rows) = (0, 0);

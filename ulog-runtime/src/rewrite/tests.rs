@@ -162,6 +162,37 @@ fn without_rules_a_log_comes_out_byte_for_byte() {
     assert!(report.topics.iter().all(|t| t.rows_in == t.rows_out));
 }
 
+/// A window no row lies in (given in the wrong clock, say) writes no row, and the report
+/// says where the rows of the topics kept lie, as `ulog cut` and `ulog csv` say it; a window
+/// with rows says nothing of it.
+#[test]
+fn a_window_no_row_lies_in_is_said_with_where_the_rows_lie() {
+    let input = flight();
+    let whole = Log::from_slice(&input).unwrap();
+    let times: Vec<u64> = whole.data().map(|r| r.timestamp).collect();
+    let (first, last) = (*times.iter().min().unwrap(), *times.iter().max().unwrap());
+    let (_, report) = rewrite(
+        Rewrite::new().window(Window::seconds(Some(1000.0), Some(2000.0)).unwrap()),
+        &input,
+    );
+    assert_eq!(report.rows().1, 0);
+    assert_eq!(report.window_missed(), Some((first, last)));
+    let text = report.to_string();
+    let line = format!(
+        "  no row of the topics kept lies in the window from 1000 s to 2000 s: their rows run \
+         from {} s to {} s\n",
+        first as f64 / 1e6,
+        last as f64 / 1e6
+    );
+    assert!(text.contains(&line), "{text}");
+    let (_, report) = rewrite(
+        Rewrite::new().window(Window::seconds(Some(3.0), Some(6.0)).unwrap()),
+        &input,
+    );
+    assert_eq!(report.window_missed(), None);
+    assert!(!report.to_string().contains("no row"), "{report}");
+}
+
 #[test]
 fn a_window_keeps_its_rows_strings_and_changes_and_the_parameters_in_force() {
     let input = flight();
