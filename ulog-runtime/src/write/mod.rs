@@ -54,7 +54,7 @@ pub enum WriteError {
     #[error("no subscription with msg_id {0}")]
     NotSubscribed(u16),
     /// A data row whose length does not fit its format.
-    #[error("`{topic}` rows are {min}..={max} bytes, got {len}")]
+    #[error("{}", row_size_text(.topic, *.len, *.min, *.max))]
     RowSize {
         /// The topic.
         topic: String,
@@ -116,6 +116,18 @@ pub enum WriteError {
     /// Appending to a file that cannot take appended data.
     #[error("cannot append: {0}")]
     CannotAppend(String),
+}
+
+/// `` `battery` rows are 31 bytes, got 3 ``, or `36 to 40 bytes` where the format's
+/// trailing padding may be left out.
+fn row_size_text(topic: &str, len: usize, min: usize, max: usize) -> String {
+    if min == max {
+        format!("`{topic}` rows are {max} bytes, got {len}")
+    } else {
+        format!(
+            "`{topic}` rows are {min} to {max} bytes (the trailing padding may be left out), got {len}"
+        )
+    }
 }
 
 /// How a new file starts.
