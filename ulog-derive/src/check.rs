@@ -179,11 +179,20 @@ fn is_byte_array(ty: &Type) -> bool {
     }
 }
 
+/// Whether a field's type is one the checks above already refused (a padding field that
+/// is not bytes, an array of arrays): the trait bound on its type is left out of the
+/// fallback, so that it is said once.
+pub(crate) fn type_refused(field: &FieldInput<'_>) -> bool {
+    (field.attrs.padding.is_some() && !is_byte_array(field.ty)) || is_multi_dimensional(field.ty)
+}
+
+fn is_multi_dimensional(ty: &Type) -> bool {
+    matches!(ty, Type::Array(outer) if matches!(&*outer.elem, Type::Array(_)))
+}
+
 /// ULog arrays have one dimension.
 fn array_dimensions(ty: &Type, errors: &mut Errors) {
-    if let Type::Array(outer) = ty
-        && let Type::Array(_) = &*outer.elem
-    {
+    if is_multi_dimensional(ty) {
         errors.push(syn::Error::new_spanned(
             ty,
             "multi-dimensional arrays do not exist in ULog: use one `[T; N]` \

@@ -75,14 +75,19 @@ pub(crate) fn fallback(input: &Input<'_>) -> TokenStream {
     let ident = input.ident;
     let p = private_path(input);
     let rust_type = ident.to_string();
-    let checks = input.fields.iter().map(|field| {
-        let ty = field.ty;
-        if field.attrs.padding.is_some() {
-            quote_spanned!(ty.span()=> __ulog_padding::<#ty>();)
-        } else {
-            quote_spanned!(ty.span()=> __ulog_field::<#ty>();)
-        }
-    });
+    // The types the checks refused are not checked again (one error each).
+    let checks = input
+        .fields
+        .iter()
+        .filter(|f| !crate::check::type_refused(f))
+        .map(|field| {
+            let ty = field.ty;
+            if field.attrs.padding.is_some() {
+                quote_spanned!(ty.span()=> __ulog_padding::<#ty>();)
+            } else {
+                quote_spanned!(ty.span()=> __ulog_field::<#ty>();)
+            }
+        });
     let timestamp = input.attrs.nested.is_none()
         && input
             .fields
