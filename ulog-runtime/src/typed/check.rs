@@ -431,6 +431,9 @@ impl fmt::Display for Mismatch {
                          accepts it)"
                     )?;
                 }
+                if let Some(hint) = char_hint(file, rust) {
+                    write!(f, " ({hint})")?;
+                }
                 Ok(())
             }
             MismatchKind::Missing { rust_struct } => write!(
@@ -469,6 +472,16 @@ impl fmt::Display for Mismatch {
             ),
         }
     }
+}
+
+/// The type that reads a file's `char` or `char[N]`, for a struct that gave bytes.
+fn char_hint(file: &str, rust: &str) -> Option<String> {
+    if file == "char" && matches!(rust, "u8" | "i8") {
+        return Some("a `char` is read by `ulog_runtime::Char`".to_owned());
+    }
+    let n = file.strip_prefix("char[")?.strip_suffix(']')?;
+    (rust == format!("[u8; {n}]") || rust == format!("[i8; {n}]"))
+        .then(|| format!("`char[{n}]` text is read by `ulog_runtime::Chars<{n}>`"))
 }
 
 /// Why a typed view of a file could not be made.

@@ -768,3 +768,24 @@ fn a_streams_decoder_made_too_early_says_the_definitions_are_not_read() {
     }
     assert_eq!(decoded, [status]);
 }
+
+/// A struct that reads a file's `char` or `char[N]` as bytes is told the types that read them.
+#[test]
+fn bytes_for_chars_are_told_char_and_chars() {
+    #[derive(ULog, Debug)]
+    struct Label {
+        timestamp: u64,
+        name: [u8; 6],
+        mark: u8,
+    }
+    let s = schema(&["label:uint64_t timestamp;char[6] name;char mark;"]);
+    let err = TypedDecoder::<Label>::new(&s).unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "label: 2 differences between the file and struct Label:\n  \
+         name is char[6] in the file, [u8; 6] in struct Label (`char[6]` text is read by \
+         `ulog_runtime::Chars<6>`)\n  \
+         mark is char in the file, u8 in struct Label (a `char` is read by \
+         `ulog_runtime::Char`)"
+    );
+}
