@@ -165,6 +165,7 @@ fn misuse_is_refused_and_writes_nothing() {
         e.to_string(),
         "`esc_status` rows are 36 to 40 bytes (the trailing padding may be left out), got 10"
     );
+    assert_eq!(w.get_ref().len(), len);
     // Without trailing padding, one size.
     w.format("plain:uint64_t timestamp;float x;").unwrap();
     let p = w.subscribe("plain", 0).unwrap();
