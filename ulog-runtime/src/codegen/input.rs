@@ -79,6 +79,9 @@ pub(crate) struct Definition {
     pub(crate) plain_docs: bool,
     /// How many differing definitions were merged into this one (0: none).
     pub(crate) merged: usize,
+    /// Its input is a damaged log: what the reader said (the first problem), for an error
+    /// about a type it nests and no input defines (the damage may have taken it).
+    pub(crate) damage: Option<String>,
 }
 
 impl Definition {
@@ -97,6 +100,7 @@ impl Definition {
             widen: HashSet::new(),
             plain_docs: false,
             merged: 0,
+            damage: None,
         }
     }
 }
@@ -240,27 +244,18 @@ pub(crate) fn read_log(
     })?;
     let schema = log.metadata().schema();
     let place = Place::Log(path.to_owned());
-    // A damaged log (cut short, say) may lack the formats its formats nest: say so, rather
-    // than that no input defines them.
-    if let Some(first) = log.diagnostics().first() {
-        for f in schema.formats() {
-            for field in &f.fields {
-                if let TypeRef::Nested(n) = &field.ty
-                    && schema.get(n).is_none()
-                {
-                    return Err(CodegenError::Log {
-                        path: path.to_owned(),
-                        error: format!(
-                            "format `{}` nests `{n}`, which the log does not define: the log \
-                             is damaged ({} problem(s), the first {first})",
-                            f.name,
-                            log.diagnostics().len()
-                        ),
-                    });
-                }
-            }
-        }
-    }
+    // A damaged log (cut short, say) may lack formats its formats nest: if no other input
+    // defines them either, the error says the log is damaged.
+    let damage = log.diagnostics().first().map(|first| {
+        format!(
+            "the log is damaged ({} problem(s), the first {first})",
+            log.diagnostics().len()
+        )
+    });
+    let definition = |f: &Format| Definition {
+        damage: damage.clone(),
+        ..Definition::plain(f.clone(), place.clone())
+    };
     // A log may hold formats outside the grammar (the reader keeps them, lax): no Rust
     // type can be named after them.
     let in_grammar = |f: &Format| -> Result<(), CodegenError> {
@@ -279,7 +274,7 @@ pub(crate) fn read_log(
         return schema
             .formats()
             .iter()
-            .map(|f| in_grammar(f).map(|()| Definition::plain(f.clone(), place.clone())))
+            .map(|f| in_grammar(f).map(|()| definition(f)))
             .collect();
     };
     let mut wanted: Vec<&Format> = Vec::new();
@@ -313,7 +308,7 @@ pub(crate) fn read_log(
         .formats()
         .iter()
         .filter(|f| wanted.iter().any(|w| w.name == f.name))
-        .map(|f| in_grammar(f).map(|()| Definition::plain(f.clone(), place.clone())))
+        .map(|f| in_grammar(f).map(|()| definition(f)))
         .collect()
 }
 

@@ -665,6 +665,11 @@ impl Builder {
                 .map(|d| d.place.clone())
                 .expect("a known format")
         };
+        let damage_of = |name: &str| {
+            defs.iter()
+                .find(|d| d.format.name == name)
+                .and_then(|d| d.damage.clone())
+        };
         // The first error of a format itself; a nested type's own error is reported under
         // its own name, so `InvalidNested` adds nothing.
         let first = schema
@@ -677,11 +682,21 @@ impl Builder {
                     format,
                     field,
                     type_name,
-                } => CodegenError::UnknownType {
-                    place: place_of(&format),
-                    format,
-                    field,
-                    type_name,
+                } => match (place_of(&format), damage_of(&format)) {
+                    // From a damaged log: the damage may have taken the type.
+                    (Place::Log(path), Some(damage)) => CodegenError::Log {
+                        path,
+                        error: format!(
+                            "format `{format}` nests `{type_name}` (field `{field}`), which \
+                             no input defines: {damage}"
+                        ),
+                    },
+                    (place, _) => CodegenError::UnknownType {
+                        place,
+                        format,
+                        field,
+                        type_name,
+                    },
                 },
                 LayoutError::Cycle(names) => CodegenError::Cycle {
                     cycle: names.iter().map(|n| (n.clone(), place_of(n))).collect(),

@@ -375,10 +375,13 @@ fn a_topic_a_log_lacks_suggests_the_closest_it_has() {
 }
 
 /// A log cut short inside its definitions, after a format and before the format it nests:
-/// the error says the log is damaged and where, not that no input defines the nested type.
+/// the error says the log is damaged and where, not only that no input defines the nested
+/// type. The damage is no error where another input defines the type, or where the topics
+/// taken do not need it.
 #[test]
 fn a_log_cut_before_a_nested_format_says_it_is_damaged() {
     let mut w = crate::Writer::new(Vec::new(), crate::WriterOptions::default()).unwrap();
+    w.format("other:uint64_t timestamp;").unwrap();
     w.format("fence:uint64_t timestamp;fence_vertex[2] vertices;")
         .unwrap();
     w.format("fence_vertex:float lat;float lon;").unwrap();
@@ -392,11 +395,22 @@ fn a_log_cut_before_a_nested_format_says_it_is_damaged() {
     assert_eq!(
         err.to_string(),
         format!(
-            "{}: format `fence` nests `fence_vertex`, which the log does not define: the log is \
-             damaged (1 problem(s), the first at byte {start}: message cut short: 33 payload \
-             bytes declared, 23 available; dropped)",
+            "{}: format `fence` nests `fence_vertex` (field `vertices`), which no input \
+             defines: the log is damaged (1 problem(s), the first at byte {start}: message cut \
+             short: 33 payload bytes declared, 23 available; dropped)",
             path.display()
         )
     );
+    let types = Builder::new()
+        .ulog(&path)
+        .format("fence_vertex:float lat;float lon;")
+        .types()
+        .unwrap();
+    assert_eq!(types.len(), 3);
+    let types = Builder::new()
+        .ulog_topics(&path, &["other"])
+        .types()
+        .unwrap();
+    assert_eq!(types.len(), 1);
     std::fs::remove_file(&path).unwrap();
 }
