@@ -185,8 +185,8 @@ def check_battery(battery, data, checks):
             d = finite(b["discharged_mah"])
             d = d[d >= 0]
             # PX4 integrates the charge from the current: without a valid current reading
-            # it is unknown.
-            expected = d[-1] if len(d) and currents else None
+            # a charge of 0 is unknown (a charge above 0 is a battery's own count).
+            expected = d[-1] if len(d) and (currents or d[-1] > 0) else None
             checks.same(what + " discharged_mah", inst["discharged_mah"], expected)
 
 

@@ -187,7 +187,15 @@ pub(crate) fn type_refused(field: &FieldInput<'_>) -> bool {
 }
 
 fn is_multi_dimensional(ty: &Type) -> bool {
-    matches!(ty, Type::Array(outer) if matches!(&*outer.elem, Type::Array(_)))
+    /// The type inside invisible groups (a `macro_rules!` `$t:ty`) and parentheses.
+    fn bare(ty: &Type) -> &Type {
+        match ty {
+            Type::Group(g) => bare(&g.elem),
+            Type::Paren(p) => bare(&p.elem),
+            other => other,
+        }
+    }
+    matches!(bare(ty), Type::Array(outer) if matches!(bare(&outer.elem), Type::Array(_)))
 }
 
 /// ULog arrays have one dimension.

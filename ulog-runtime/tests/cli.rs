@@ -1221,9 +1221,9 @@ fn info_lists_a_damaged_definition_in_printable_text() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// `info`'s rate column: a sparse topic's rate to three significant digits (one decimal
-/// showed 0.0 Hz), and `-` for rows that span no time (one row, or two at one time), where
-/// 0.0 Hz was shown.
+/// `info`'s rate column: a rate below 1 Hz to three significant digits (one decimal showed
+/// 0.0 Hz below 0.05 Hz), in exponent form below 0.0001 Hz, and `-` for rows that span no
+/// time (one row, or two at one time), where 0.0 Hz was shown.
 #[test]
 fn info_shows_a_sparse_topics_rate_and_none_for_rows_at_one_time() {
     use ulog_runtime::read::{FileHeader, Message};
@@ -1235,12 +1235,15 @@ fn info_shows_a_sparse_topics_rate_and_none_for_rows_at_one_time() {
     .to_vec();
     let mut put = |m: Message<'_>| m.encode(&mut bytes).unwrap();
     // Rows at these seconds: 3 rows over 120 s (2 intervals: 1/60 Hz), one row, two rows at
-    // one time, and 11 rows over 1 s.
-    let topics: [(&[u8], &[u64]); 4] = [
+    // one time, 11 rows over 1 s, 3 rows over 16 s (0.125 Hz), and 2 rows 1e9 s apart (a
+    // row at time 0 beside a date).
+    let topics: [(&[u8], &[u64]); 6] = [
         (b"sparse", &[0, 60, 120]),
         (b"once", &[5]),
         (b"same", &[7, 7]),
         (b"fast", &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10]),
+        (b"slow", &[0, 8, 16]),
+        (b"rare", &[0, 1_000_000_000]),
     ];
     for (i, (name, _)) in topics.iter().enumerate() {
         let mut format = name.to_vec();
@@ -1281,6 +1284,8 @@ fn info_shows_a_sparse_topics_rate_and_none_for_rows_at_one_time() {
     assert_eq!(cells("once"), ["-", "0.0"], "{text}");
     assert_eq!(cells("same"), ["-", "0.0"], "{text}");
     assert_eq!(cells("fast"), ["10.0", "1.0"], "{text}");
+    assert_eq!(cells("slow"), ["0.125", "16.0"], "{text}");
+    assert_eq!(cells("rare"), ["1.00e-9", "1000000000.0"], "{text}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -1345,7 +1350,7 @@ fn info_names_a_version_1_file_without_flag_bits_and_an_absolute_start() {
         "{text}"
     );
     // Rows out of time order (a clock stepped back): the rate and duration over their span,
-    // earliest to latest (5 rows from 1 s to 5.5 s: 0.9 Hz over 4.5 s), not 0 as when the
+    // earliest to latest (5 rows from 1 s to 5.5 s: 0.889 Hz over 4.5 s), not 0 as when the
     // first and the last row in the file (both at 2 s) were taken for the span.
     for t in [4_000_000u64, 1_000_000, 2_000_000] {
         Message::Data {
@@ -1363,7 +1368,7 @@ fn info_names_a_version_1_file_without_flag_bits_and_an_absolute_start() {
         .expect("the topic's line");
     let cells: Vec<&str> = line.split_whitespace().collect();
     assert_eq!(cells[3], "5", "{line}");
-    assert_eq!(cells[6..], ["0.9", "4.5"], "{line}");
+    assert_eq!(cells[6..], ["0.889", "4.5"], "{line}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -1498,9 +1503,17 @@ fn a_window_no_row_can_lie_in_is_refused_and_an_empty_one_is_named() {
     let cut_out = ulog(&[&["cut", l, "-o", c][..], &early[..]].concat());
     let err = String::from_utf8_lossy(&cut_out.stderr);
     assert!(cut_out.status.success(), "{err}");
-    assert!(err.contains(window), "{err}");
-    // Instances with no row written are counted in one line, not listed one by one.
+    // `cut` says it once, in its report (stdout), not again on stderr.
     let text = String::from_utf8_lossy(&cut_out.stdout);
+    assert!(
+        text.contains(
+            "  no row of the topics kept lies in the window from 10 s to 20 s: their rows run \
+             from 3723 s to 3724.000001 s\n"
+        ),
+        "{text}"
+    );
+    assert!(!err.contains("lies in the window"), "{err}");
+    // Instances with no row written are counted in one line, not listed one by one.
     assert!(
         text.lines()
             .any(|l| l == "  2 topic instances left out whole (22 rows)"),
@@ -1522,9 +1535,10 @@ fn a_window_no_row_can_lie_in_is_refused_and_an_empty_one_is_named() {
     let neg = ulog(&["cut", l, "-o", c, "--start", "-1", "--end", "-0.5"]);
     let err = String::from_utf8_lossy(&neg.stderr);
     assert!(neg.status.success(), "{err}");
+    let text = String::from_utf8_lossy(&neg.stdout);
     assert!(
-        err.contains("no row of the topics asked for lies in the window from -1 s to -0.5 s"),
-        "{err}"
+        text.contains("no row of the topics kept lies in the window from -1 s to -0.5 s"),
+        "{text}"
     );
     // Every topic excluded: no row asked for, so the window is not blamed.
     let none = ulog(&[
@@ -1539,7 +1553,7 @@ fn a_window_no_row_can_lie_in_is_refused_and_an_empty_one_is_named() {
     ]);
     assert!(none.status.success());
     assert!(
-        !String::from_utf8_lossy(&none.stderr).contains("lies in the window"),
+        !String::from_utf8_lossy(&none.stdout).contains("lies in the window"),
         "{none:?}"
     );
     // A topic both kept and excluded is left out, and said (it was silent before); the
@@ -1557,7 +1571,7 @@ fn a_window_no_row_can_lie_in_is_refused_and_an_empty_one_is_named() {
     let fine = ulog(&["cut", l, "-o", c, "--start", "3723.3", "-m", "esc_status"]);
     assert!(fine.status.success());
     assert!(
-        !String::from_utf8_lossy(&fine.stderr).contains("lies in the window"),
+        !String::from_utf8_lossy(&fine.stdout).contains("lies in the window"),
         "{fine:?}"
     );
     std::fs::remove_dir_all(&dir).unwrap();

@@ -175,9 +175,9 @@ pub struct BatteryInstance {
     pub avg_current_a: Option<f64>,
     /// Largest current, A.
     pub max_current_a: Option<f64>,
-    /// Charge drawn (the last valid reading), mAh; `None` also when no current reading
-    /// was valid (PX4 integrates the charge from the current, and without a current
-    /// sensor writes a charge of 0 throughout).
+    /// Charge drawn (the last valid reading), mAh; `None` also for a charge of 0 when no
+    /// current reading was valid (PX4 integrates the charge from the current, and without a
+    /// current sensor writes a charge of 0 throughout).
     pub discharged_mah: Option<f64>,
     /// Lowest voltage, V.
     pub min_voltage_v: Option<f64>,

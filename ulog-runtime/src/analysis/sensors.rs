@@ -319,8 +319,9 @@ impl Sensors {
                 max_current_a: b.max_current,
                 // PX4 integrates the charge drawn from the current: with no current
                 // reading (a battery without a current sensor writes -1 and a charge of
-                // 0 throughout), the charge is unknown, not 0.
-                discharged_mah: b.discharged.filter(|_| b.current_n > 0),
+                // 0 throughout), a charge of 0 is unknown, not a measurement; a charge
+                // above 0 (a smart battery's own count) is kept.
+                discharged_mah: b.discharged.filter(|d| b.current_n > 0 || *d > 0.0),
                 min_voltage_v: b.min_voltage,
                 cells: Sensors::cells(meta, *m, b),
             })

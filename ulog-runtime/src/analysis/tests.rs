@@ -117,6 +117,8 @@ pub(crate) struct Faults {
     /// A battery without a current sensor: current -1 ("unknown") and a charge drawn of 0
     /// throughout, as PX4 writes them.
     pub(crate) no_current_sensor: bool,
+    /// A battery that counts its charge drawn itself but reports no current (-1).
+    pub(crate) charge_without_current: bool,
 }
 
 const S: u64 = 1_000_000;
@@ -198,7 +200,7 @@ pub(crate) fn flight(faults: Faults) -> Vec<u8> {
                 &BatteryStatus {
                     timestamp: t,
                     voltage_v: v as f32,
-                    current_a: if faults.no_current_sensor {
+                    current_a: if faults.no_current_sensor || faults.charge_without_current {
                         -1.0
                     } else if flying {
                         10.0
@@ -478,6 +480,14 @@ fn a_battery_without_a_current_sensor_has_no_charge_drawn() {
     // With a current sensor, the same flight's charge is the last reading.
     let with = analysis(Faults::default());
     assert!((with.battery.discharged_mah.unwrap() - 2995.0).abs() < 0.01);
+    // A battery that counts its charge itself (above 0) without a current: the count is
+    // kept.
+    let counted = analysis(Faults {
+        charge_without_current: true,
+        ..Faults::default()
+    });
+    assert_eq!(counted.battery.avg_current_a, None);
+    assert!((counted.battery.discharged_mah.unwrap() - 2995.0).abs() < 0.01);
 }
 
 /// The one diagnostic a fault makes: its id, severity, start and end (µs, to 0.2 s).

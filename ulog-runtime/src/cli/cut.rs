@@ -56,9 +56,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         .exclude(&exclude)
         .run_file(&args.file, &args.output)
         .map_err(|e| crate::cli::rewrite_failure(&args.file, e))?;
-    // Where the rows of the topics kept lie, when the window has none (as `ulog csv` says it).
-    if let Some(span) = report.window_missed() {
-        crate::cli::report_empty_window(&args.file, &window, Some(span));
-    }
+    // A window no row of the topics kept lies in is said by the report itself
+    // (`Report::window_missed`), with where their rows lie.
     crate::cli::report_rewrite(&report, &args.output, out)
 }

@@ -303,19 +303,23 @@ fn info(log: &Log<'_>, file: &Path, verbose: bool, out: &mut impl Write) -> Resu
     Ok(())
 }
 
-/// A topic's rate for the table, from its `rows` over `span` seconds: one decimal, or three
-/// significant digits below 0.05 Hz (which one decimal shows as 0.0: a topic written once a
-/// minute is 0.0167 Hz); `-` when its rows span no time (one row, or all at one time).
+/// A topic's rate for the table, from its `rows` over `span` seconds: one decimal from
+/// 1 Hz, three significant digits below (a row every 8 s is 0.125, every 14 s 0.0714: one
+/// decimal showed 0.1 for both, and 0.0 below 0.05 Hz), in exponent form below 0.0001 Hz
+/// (`1.16e-5`, a row a day), so that it fits the column; `-` when its rows span no time
+/// (one row, or all at one time).
 fn rate_cell(rows: usize, span: f64) -> String {
     if rows < 2 || span <= 0.0 {
         return "-".to_owned();
     }
     let rate = (rows - 1) as f64 / span;
-    if rate >= 0.05 {
+    if rate >= 1.0 {
         format!("{rate:.1}")
-    } else {
-        // Digits after the point for three significant ones (at most 9, the column's width).
-        let decimals = (2 - rate.log10().floor() as i32).clamp(0, 9) as usize;
+    } else if rate >= 1e-4 {
+        // Digits after the point for three significant ones (3 to 6).
+        let decimals = (2 - rate.log10().floor() as i32).clamp(3, 6) as usize;
         format!("{rate:.decimals$}")
+    } else {
+        format!("{rate:.2e}")
     }
 }

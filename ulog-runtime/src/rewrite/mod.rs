@@ -275,7 +275,7 @@ pub struct Report {
     pub anonymized: Option<anonymize::Anonymized>,
     /// What the reader skipped of the input (damage, unknown messages): not in the output.
     pub skipped: Skipped,
-    /// The window asked for (none: every row).
+    /// The window asked for (unbounded: every row).
     pub window: Window,
 }
 

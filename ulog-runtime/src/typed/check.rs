@@ -270,7 +270,12 @@ fn check_format(
                 if let (TypedKind::Nested(inner), FieldKind::Nested(inner_id)) =
                     (field.kind, file_field.kind)
                 {
-                    let prefix = format!("{path}[].");
+                    let brackets = if file_field.array_len.is_some() {
+                        "[]"
+                    } else {
+                        ""
+                    };
+                    let prefix = format!("{path}{brackets}.");
                     check_format(inner, inner_id, schema, &prefix, out);
                 }
             }
@@ -503,7 +508,7 @@ pub enum TypedError {
     #[error(
         "no format `{topic}` (wanted by struct {rust_type}) among the {read} read so far: the \
          stream's definitions are not all read yet (make the decoder at the topic's \
-         `Event::Subscription`, or after `StreamReader::read_definitions`)"
+         `Event::Subscription`)"
     )]
     DefinitionsNotRead {
         /// The topic.

@@ -747,7 +747,7 @@ fn a_streams_decoder_made_too_early_says_the_definitions_are_not_read() {
         err.to_string(),
         "no format `esc_status` (wanted by struct EscStatus) among the 1 read so far: the \
          stream's definitions are not all read yet (make the decoder at the topic's \
-         `Event::Subscription`, or after `StreamReader::read_definitions`)"
+         `Event::Subscription`)"
     );
     let mut decoded = Vec::new();
     let mut decoder = None;
@@ -787,5 +787,22 @@ fn bytes_for_chars_are_told_char_and_chars() {
          `ulog_runtime::Chars<6>`)\n  \
          mark is char in the file, u8 in struct Label (a `char` is read by \
          `ulog_runtime::Char`)"
+    );
+}
+
+/// A nested field that is one struct in the file and an array in the struct: its nested
+/// differences are listed too, at paths without `[]` (the file's field is no array).
+#[test]
+fn nested_differences_of_a_single_nested_field_have_no_brackets() {
+    let s = schema(&[
+        "esc_status:uint64_t timestamp;uint8_t esc_count;esc_report esc;",
+        "esc_report:float esc_rpm;float esc_voltage;",
+    ]);
+    let err = TypedDecoder::<EscStatus>::new(&s).unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "esc_status: 2 differences between the file and struct EscStatus:\n  \
+         esc is esc_report in the file, [EscReport; 2] in struct EscStatus\n  \
+         esc.esc_rpm is float in the file, i32 in struct EscReport"
     );
 }
