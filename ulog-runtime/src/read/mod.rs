@@ -57,7 +57,11 @@ pub struct Row<'a> {
 }
 
 impl<'a> Row<'a> {
-    /// The row as a value tree (padding hidden, `char` arrays as text).
+    /// The row as a value tree (padding hidden, `char` arrays as text). `None` only for a
+    /// row its format cannot decode: a format with no valid layout, or a row shorter than
+    /// the format's payload without its trailing padding. The readers never hand over such
+    /// rows (they skip them, and say so once in a [`Diagnostic`]), so
+    /// for their rows this is always `Some`; a [`Row`] put together otherwise may be either.
     pub fn value(&self) -> Option<Value> {
         self.plan()?.value(self.schema, self.data)
     }
