@@ -1226,49 +1226,44 @@ fn info_lists_a_damaged_definition_in_printable_text() {
 /// time (one row, or two at one time), where 0.0 Hz was shown.
 #[test]
 fn info_shows_a_sparse_topics_rate_and_none_for_rows_at_one_time() {
-    use ulog_runtime::read::{FileHeader, Message};
-    let mut bytes = FileHeader {
-        version: 1,
-        start_timestamp: 0,
-    }
-    .to_bytes()
-    .to_vec();
-    let mut put = |m: Message<'_>| m.encode(&mut bytes).unwrap();
+    use ulog_runtime::read::Message;
     // Rows at these seconds: 3 rows over 120 s (2 intervals: 1/60 Hz), one row, two rows at
     // one time, 11 rows over 1 s, 3 rows over 16 s (0.125 Hz), and 2 rows 1e9 s apart (a
     // row at time 0 beside a date).
-    let topics: [(&[u8], &[u64]); 6] = [
-        (b"sparse", &[0, 60, 120]),
-        (b"once", &[5]),
-        (b"same", &[7, 7]),
-        (b"fast", &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10]),
-        (b"slow", &[0, 8, 16]),
-        (b"rare", &[0, 1_000_000_000]),
+    let topics: [(&str, &[u64]); 6] = [
+        ("sparse", &[0, 60, 120]),
+        ("once", &[5]),
+        ("same", &[7, 7]),
+        ("fast", &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10]),
+        ("slow", &[0, 8, 16]),
+        ("rare", &[0, 1_000_000_000]),
     ];
-    for (i, (name, _)) in topics.iter().enumerate() {
-        let mut format = name.to_vec();
-        format.extend_from_slice(b":uint64_t timestamp;");
-        put(Message::Format(&format));
-        put(Message::Subscribe {
+    let formats: Vec<String> = topics
+        .iter()
+        .map(|(name, _)| format!("{name}:uint64_t timestamp;"))
+        .collect();
+    // `fast` in tenths of a second, the others in seconds.
+    let rows: Vec<(u16, [u8; 8])> = (0u16..)
+        .zip(&topics)
+        .flat_map(|(i, (name, times))| {
+            let unit = if *name == "fast" { 100_000 } else { 1_000_000 };
+            times.iter().map(move |t| (i, (t * unit).to_le_bytes()))
+        })
+        .collect();
+    let mut messages = Vec::new();
+    for ((i, (name, _)), format) in (0u16..).zip(&topics).zip(&formats) {
+        messages.push(Message::Format(format.as_bytes()));
+        messages.push(Message::Subscribe {
             multi_id: 0,
-            msg_id: i as u16,
-            name,
+            msg_id: i,
+            name: name.as_bytes(),
         });
     }
-    for (i, (name, times)) in topics.iter().enumerate() {
-        for &t in *times {
-            // `fast` in tenths of a second, the others in seconds.
-            let us = if *name == b"fast" {
-                t * 100_000
-            } else {
-                t * 1_000_000
-            };
-            put(Message::Data {
-                msg_id: i as u16,
-                data: &us.to_le_bytes(),
-            });
-        }
-    }
+    messages.extend(rows.iter().map(|(msg_id, data)| Message::Data {
+        msg_id: *msg_id,
+        data,
+    }));
+    let bytes = hand_built(&messages);
     let dir = temp_dir("rates");
     let log = dir.join("rates.ulg");
     std::fs::write(&log, &bytes).unwrap();
