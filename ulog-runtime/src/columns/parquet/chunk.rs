@@ -1,8 +1,11 @@
 //! One column chunk of a row group: a column's values, from every batch of the row group,
 //! encoded by parquet-rs's column writer (PLAIN values, statistics, the page index) into
 //! pages that are compressed here, with one ZSTD context a thread for every chunk it
-//! writes. A `FLOAT` or `DOUBLE` column's statistics are taken from its pages here too
-//! ([`super::statistics`]).
+//! writes. A `FLOAT` or `DOUBLE` column's pages are made here instead
+//! ([`write_float_chunk`]): PLAIN values are the values' own bytes, so each page is the
+//! batches' values copied once into a page buffer, its statistics taken from it
+//! ([`super::statistics`]) and compressed from it (parquet-rs's writer copied each value
+//! into a buffer that grows from nothing every page, then that into the page).
 //!
 //! parquet-rs's own compression makes a ZSTD compression and a decompression context for
 //! each column chunk. Making one costs more than compressing a small chunk: each runs
@@ -16,12 +19,13 @@ use std::cell::RefCell;
 use std::io::Write;
 
 use bytes::Bytes;
-use parquet::basic::{Compression, Encoding, Type, ZstdLevel};
+use parquet::basic::{Compression, Encoding, EncodingMask, PageType, Type, ZstdLevel};
 use parquet::column::page::{CompressedPage, Page, PageWriteSpec, PageWriter};
 use parquet::column::writer::{ColumnCloseResult, ColumnWriter, get_column_writer};
 use parquet::data_type::ByteArray;
 use parquet::errors::ParquetError;
-use parquet::file::properties::WriterPropertiesPtr;
+use parquet::file::metadata::{ColumnChunkMetaData, OffsetIndexBuilder, PageEncodingStats};
+use parquet::file::properties::{WriterProperties, WriterPropertiesPtr};
 use parquet::file::writer::{SerializedPageWriter, SerializedRowGroupWriter, TrackedWrite};
 use parquet::schema::types::ColumnDescPtr;
 
@@ -32,15 +36,18 @@ use crate::columns::ColumnValues;
 pub(super) struct ChunkProperties {
     /// For the columns whose statistics parquet-rs takes.
     pub(super) parquet: WriterPropertiesPtr,
-    /// For `FLOAT` and `DOUBLE` columns, when their statistics are taken here (statistics
-    /// off, and the values PLAIN: no dictionary); and whether a column index is made.
-    pub(super) float: Option<(WriterPropertiesPtr, bool)>,
+    /// Whether `FLOAT` and `DOUBLE` columns' pages are made here ([`write_float_chunk`]:
+    /// the values PLAIN, no dictionary), and if so whether a column index is made.
+    pub(super) float: Option<bool>,
 }
 
 thread_local! {
     /// This thread's ZSTD context, and the level it compresses at.
     static ZSTD: RefCell<Option<(i32, zstd::bulk::Compressor<'static>)>> =
         const { RefCell::new(None) };
+    /// This thread's page buffer for [`write_float_chunk`] (a chunk's own would be a page
+    /// zeroed for every chunk, most of them a few values).
+    static PAGE: RefCell<Vec<u8>> = const { RefCell::new(Vec::new()) };
 }
 
 /// Runs `f` with this thread's ZSTD context at `level` (made on first use, or when the level
@@ -68,8 +75,6 @@ fn zstd_error(e: std::io::Error) -> ParquetError {
 struct CompressingPages<'a> {
     out: &'a mut TrackedWrite<Vec<u8>>,
     zstd: &'a mut zstd::bulk::Compressor<'static>,
-    /// The statistics taken here, of a `FLOAT` or `DOUBLE` column's data pages.
-    float: Option<&'a mut FloatStatistics>,
 }
 
 impl PageWriter for CompressingPages<'_> {
@@ -86,25 +91,14 @@ impl PageWriter for CompressingPages<'_> {
                 def_level_encoding,
                 rep_level_encoding,
                 statistics,
-            } => {
-                if let Some(stats) = self.float.as_deref_mut() {
-                    if *encoding != Encoding::PLAIN {
-                        return Err(ParquetError::General(format!(
-                            "a float data page encoded {encoding}: its statistics are taken \
-                             from PLAIN values only"
-                        )));
-                    }
-                    stats.page(buf, *num_values)?;
-                }
-                Page::DataPage {
-                    buf: compressed(buf, self.zstd)?,
-                    num_values: *num_values,
-                    encoding: *encoding,
-                    def_level_encoding: *def_level_encoding,
-                    rep_level_encoding: *rep_level_encoding,
-                    statistics: statistics.clone(),
-                }
-            }
+            } => Page::DataPage {
+                buf: compressed(buf, self.zstd)?,
+                num_values: *num_values,
+                encoding: *encoding,
+                def_level_encoding: *def_level_encoding,
+                rep_level_encoding: *rep_level_encoding,
+                statistics: statistics.clone(),
+            },
             Page::DictionaryPage {
                 buf,
                 num_values,
@@ -143,20 +137,20 @@ pub(super) fn write_chunk<'b, W: Write + Send>(
     batches: impl Iterator<Item = &'b ColumnValues>,
 ) -> Result<(), ParquetError> {
     let kind = descr.physical_type();
-    let float = props
+    if let Some(page_index) = props
         .float
-        .as_ref()
-        .filter(|_| matches!(kind, Type::FLOAT | Type::DOUBLE));
-    let mut stats = float.map(|_| FloatStatistics::new(kind));
+        .filter(|_| matches!(kind, Type::FLOAT | Type::DOUBLE))
+    {
+        let page_values = float_page_values(&props.parquet, kind);
+        return write_float_chunk(row_group, descr, page_values, page_index, level, batches);
+    }
     let mut out = TrackedWrite::new(Vec::new());
     let close = with_zstd(level, |zstd| {
         let pages = CompressingPages {
             out: &mut out,
             zstd,
-            float: stats.as_mut(),
         };
-        let column_props = float.map_or(&props.parquet, |(p, _)| p).clone();
-        let mut writer = get_column_writer(descr, column_props, Box::new(pages));
+        let mut writer = get_column_writer(descr, props.parquet.clone(), Box::new(pages));
         let mut widened = Widened::default();
         for values in batches {
             write_values(&mut writer, values, &mut widened)?;
@@ -171,16 +165,10 @@ pub(super) fn write_chunk<'b, W: Write + Send>(
         column_index,
         offset_index,
     } = close;
-    let mut metadata = metadata
+    let metadata = metadata
         .into_builder()
-        .set_compression(Compression::ZSTD(ZstdLevel::try_new(level)?));
-    let mut column_index = column_index;
-    if let (Some(stats), Some((_, page_index))) = (stats, float) {
-        let (statistics, index) = stats.finish(*page_index)?;
-        metadata = metadata.set_statistics(statistics);
-        column_index = index;
-    }
-    let metadata = metadata.build()?;
+        .set_compression(Compression::ZSTD(ZstdLevel::try_new(level)?))
+        .build()?;
     let chunk = Bytes::from(out.into_inner()?);
     row_group.append_column(
         &chunk,
@@ -193,6 +181,207 @@ pub(super) fn write_chunk<'b, W: Write + Send>(
             offset_index,
         },
     )
+}
+
+/// Values a data page of a `FLOAT` or `DOUBLE` column holds (at least one): as many as
+/// the page size limit of `props` and its row count limit allow.
+fn float_page_values(props: &WriterProperties, kind: Type) -> usize {
+    let width = if kind == Type::DOUBLE { 8 } else { 4 };
+    (props.data_page_size_limit() / width)
+        .min(props.data_page_row_count_limit())
+        .max(1)
+}
+
+/// Writes the chunk of a `FLOAT` or `DOUBLE` column (`descr`: a required one) as
+/// [`write_chunk`] does others with parquet-rs's column writer (the same page headers and
+/// chunk metadata): data pages (version 1) of `page_values` PLAIN values each (the last
+/// one fewer),
+/// compressed at ZSTD `level`; the chunk's statistics, its offset index, and its column
+/// index if `page_index`, taken from the values as they are copied ([`FloatStatistics`]).
+pub(super) fn write_float_chunk<'b, W: Write + Send>(
+    row_group: &mut SerializedRowGroupWriter<'_, W>,
+    descr: ColumnDescPtr,
+    page_values: usize,
+    page_index: bool,
+    level: i32,
+    batches: impl Iterator<Item = &'b ColumnValues>,
+) -> Result<(), ParquetError> {
+    let kind = descr.physical_type();
+    let width = if kind == Type::DOUBLE { 8 } else { 4 };
+    let page_bytes = page_values.max(1) * width;
+    let mut page = PAGE.with_borrow_mut(std::mem::take);
+    if page.len() < page_bytes {
+        page.resize(page_bytes, 0);
+    }
+    let mut pages = FloatPages {
+        out: TrackedWrite::new(Vec::new()),
+        stats: FloatStatistics::new(kind),
+        offsets: OffsetIndexBuilder::new(),
+        page,
+        page_bytes,
+        filled: 0,
+        width,
+        count: 0,
+        values: 0,
+        compressed: 0,
+        uncompressed: 0,
+        bytes_written: 0,
+        first_offset: None,
+    };
+    let written = with_zstd(level, |zstd| {
+        for values in batches {
+            match (values, kind) {
+                (ColumnValues::Float(v), Type::FLOAT) => {
+                    pages.put(v, FloatStatistics::copy_f32, zstd)?;
+                }
+                (ColumnValues::Double(v), Type::DOUBLE) => {
+                    let copy = |stats: &mut FloatStatistics, v: &[f64], to: &mut [[u8; 8]]| {
+                        for (to, x) in to.iter_mut().zip(v) {
+                            *to = x.to_le_bytes();
+                        }
+                        stats.take_f64(to.as_flattened());
+                    };
+                    pages.put(v, copy, zstd)?;
+                }
+                _ => {
+                    return Err(ParquetError::General(format!(
+                        "a column of {} values given to a writer of {kind} values",
+                        values.type_name()
+                    )));
+                }
+            }
+        }
+        pages.flush(zstd)
+    });
+    // The buffer is kept for the next chunk, whatever became of this one.
+    PAGE.with_borrow_mut(|p| *p = std::mem::take(&mut pages.page));
+    written?;
+    let (statistics, column_index) = pages.stats.finish(page_index)?;
+    let metadata = ColumnChunkMetaData::builder(descr)
+        .set_compression(Compression::ZSTD(ZstdLevel::try_new(level)?))
+        // Levels are RLE-encoded (there are none: the column is required).
+        .set_encodings_mask(EncodingMask::new_from_encodings(
+            [Encoding::PLAIN, Encoding::RLE].iter(),
+        ))
+        .set_page_encoding_stats(if pages.count == 0 {
+            Vec::new()
+        } else {
+            vec![PageEncodingStats {
+                page_type: PageType::DATA_PAGE,
+                encoding: Encoding::PLAIN,
+                count: i32::try_from(pages.count).map_err(|_| too_many("pages"))?,
+            }]
+        })
+        .set_total_compressed_size(i64::try_from(pages.compressed).map_err(|_| too_many("bytes"))?)
+        .set_total_uncompressed_size(
+            i64::try_from(pages.uncompressed).map_err(|_| too_many("bytes"))?,
+        )
+        .set_num_values(i64::try_from(pages.values).map_err(|_| too_many("values"))?)
+        .set_data_page_offset(
+            i64::try_from(pages.first_offset.unwrap_or(0)).map_err(|_| too_many("bytes"))?,
+        )
+        .set_dictionary_page_offset(None)
+        .set_statistics(statistics)
+        .build()?;
+    let chunk = Bytes::from(pages.out.into_inner()?);
+    row_group.append_column(
+        &chunk,
+        ColumnCloseResult {
+            bytes_written: pages.bytes_written,
+            rows_written: pages.values,
+            metadata,
+            bloom_filter: None,
+            column_index,
+            offset_index: Some(pages.offsets.build()),
+        },
+    )
+}
+
+fn too_many(what: &str) -> ParquetError {
+    ParquetError::General(format!("a column chunk of more {what} than Parquet counts"))
+}
+
+/// The pages of a `FLOAT` or `DOUBLE` column chunk being written ([`write_float_chunk`]).
+struct FloatPages {
+    /// The chunk: each page's header and compressed values.
+    out: TrackedWrite<Vec<u8>>,
+    stats: FloatStatistics,
+    offsets: OffsetIndexBuilder,
+    /// The page being filled: the first `filled` of its `page_bytes` (the buffer may be
+    /// longer).
+    page: Vec<u8>,
+    page_bytes: usize,
+    filled: usize,
+    /// Bytes a value.
+    width: usize,
+    /// Pages written, values in them, and their sizes (each with its header).
+    count: u64,
+    values: u64,
+    compressed: u64,
+    uncompressed: u64,
+    bytes_written: u64,
+    /// Where the first page begins in the chunk.
+    first_offset: Option<u64>,
+}
+
+impl FloatPages {
+    /// Copies `values` into pages (`copy`: copies values into a page, as their PLAIN bytes
+    /// of `N` each, taking their statistics), writing each page that fills.
+    fn put<T, const N: usize>(
+        &mut self,
+        mut values: &[T],
+        copy: impl Fn(&mut FloatStatistics, &[T], &mut [[u8; N]]),
+        zstd: &mut zstd::bulk::Compressor<'static>,
+    ) -> Result<(), ParquetError> {
+        debug_assert_eq!(N, self.width);
+        while !values.is_empty() {
+            let room = self.page[self.filled..self.page_bytes]
+                .as_chunks_mut::<N>()
+                .0;
+            let (taken, rest) = values.split_at(values.len().min(room.len()));
+            copy(&mut self.stats, taken, &mut room[..taken.len()]);
+            self.filled += taken.len() * N;
+            values = rest;
+            if self.filled == self.page_bytes {
+                self.flush(zstd)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Writes the values gathered (if any) as a data page.
+    fn flush(&mut self, zstd: &mut zstd::bulk::Compressor<'static>) -> Result<(), ParquetError> {
+        if self.filled == 0 {
+            return Ok(());
+        }
+        let plain = &self.page[..self.filled];
+        let num_values = u32::try_from(self.filled / self.width).map_err(|_| too_many("values"))?;
+        self.stats.end_page()?;
+        let page = Page::DataPage {
+            buf: Bytes::from(zstd.compress(plain).map_err(zstd_error)?),
+            num_values,
+            encoding: Encoding::PLAIN,
+            def_level_encoding: Encoding::RLE,
+            rep_level_encoding: Encoding::RLE,
+            statistics: None,
+        };
+        let spec = SerializedPageWriter::new(&mut self.out)
+            .write_page(CompressedPage::new(page, self.filled))?;
+        let size = i32::try_from(spec.compressed_size).map_err(|_| too_many("bytes"))?;
+        self.offsets.append_offset_and_size(
+            i64::try_from(spec.offset).map_err(|_| too_many("bytes"))?,
+            size,
+        );
+        self.offsets.append_row_count(i64::from(num_values));
+        self.first_offset.get_or_insert(spec.offset);
+        self.count += 1;
+        self.values += u64::from(num_values);
+        self.compressed += spec.compressed_size as u64;
+        self.uncompressed += spec.uncompressed_size as u64;
+        self.bytes_written += spec.bytes_written;
+        self.filled = 0;
+        Ok(())
+    }
 }
 
 /// Room for values widened to their Parquet type, kept between the batches of a chunk.

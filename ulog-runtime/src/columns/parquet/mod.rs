@@ -124,22 +124,17 @@ impl ParquetOptions {
     }
 
     /// The properties without compression, for column writers whose pages are compressed
-    /// by [`chunk`]; and for `FLOAT` and `DOUBLE` columns, whose statistics are taken there
-    /// from PLAIN pages in the type-defined order ([`statistics`]), the same without
-    /// statistics (unless a dictionary is asked for: its pages are not PLAIN values).
+    /// by [`chunk`]; and whether `FLOAT` and `DOUBLE` columns are written by [`chunk`]
+    /// itself, their statistics in the type-defined order ([`statistics`]), with a column
+    /// index or not (unless a dictionary is asked for: their pages are PLAIN values).
     fn chunk_properties(&self) -> chunk::ChunkProperties {
-        let uncompressed = || {
-            self.builder(Vec::new())
-                .set_compression(Compression::UNCOMPRESSED)
-        };
         chunk::ChunkProperties {
-            parquet: std::sync::Arc::new(uncompressed().build()),
-            float: (!self.dictionary).then(|| {
-                let props = uncompressed()
-                    .set_statistics_enabled(EnabledStatistics::None)
-                    .build();
-                (std::sync::Arc::new(props), self.page_statistics)
-            }),
+            parquet: std::sync::Arc::new(
+                self.builder(Vec::new())
+                    .set_compression(Compression::UNCOMPRESSED)
+                    .build(),
+            ),
+            float: (!self.dictionary).then_some(self.page_statistics),
         }
     }
 
@@ -149,7 +144,12 @@ impl ParquetOptions {
     ) -> parquet::file::properties::WriterPropertiesBuilder {
         WriterProperties::builder()
             .set_dictionary_enabled(self.dictionary)
+            // Pages of 1 MiB, however many values that is (parquet-rs also cuts pages at
+            // 20,000 rows: 80 KB of `f32`, and each page its own ZSTD frame and tables; 1 MiB
+            // pages took 3.6% fewer instructions to convert the benchmark log, its files 2%
+            // smaller; the column index is coarser for it).
             .set_data_page_size_limit(1 << 20)
+            .set_data_page_row_count_limit(usize::MAX)
             .set_statistics_enabled(if self.page_statistics {
                 EnabledStatistics::Page
             } else {

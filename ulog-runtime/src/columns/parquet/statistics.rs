@@ -1,6 +1,6 @@
 //! The statistics of `FLOAT` and `DOUBLE` column chunks (minimum, maximum and NaN count, of
 //! each page and of the chunk, and the column index made of the pages'), taken here from
-//! each page's PLAIN values as the page is handed over to be compressed, in the format's
+//! the PLAIN values as they are copied into their page ([`super::chunk`]), in the format's
 //! type-defined order, instead of by parquet-rs's column writer; and the footer that says
 //! so.
 //!
@@ -52,6 +52,19 @@ struct Page {
     nans: u64,
 }
 
+impl Page {
+    /// The statistics of the values of both.
+    fn merge(self, other: Page) -> Page {
+        Page {
+            bounds: match (self.bounds, other.bounds) {
+                (Some((lo, hi)), Some((l, h))) => Some(signed_zeros((lo.min(l), hi.max(h)))),
+                (one, None) | (None, one) => one,
+            },
+            nans: self.nans + other.nans,
+        }
+    }
+}
+
 /// Bounds in the type-defined order: a zero minimum is -0.0, a zero maximum +0.0.
 fn signed_zeros((min, max): (f64, f64)) -> (f64, f64) {
     (
@@ -78,8 +91,11 @@ fn reduce_f64(values: &[u8]) -> Page {
     }
 }
 
-/// The bounds (NaN left out) and NaN count of `values`, PLAIN `f32`s (4 bytes each).
-fn reduce(values: &[u8]) -> Page {
+/// Copies `values` into `to` (their PLAIN bytes: as many, 4 bytes each) and gives their
+/// bounds (NaN left out) and NaN count, in one pass: the values are read once, and the
+/// reduction waits on no memory of its own.
+fn copy_reduce(values: &[f32], to: &mut [[u8; 4]]) -> Page {
+    assert_eq!(values.len(), to.len(), "room for every value");
     // Per lane: the least and greatest key of a value that is not NaN, and the NaNs seen.
     // A NaN is replaced by each bound's identity, with masks rather than branches.
     let mut lanes = Lanes {
@@ -89,27 +105,30 @@ fn reduce(values: &[u8]) -> Page {
     };
     let mut nans = 0u64;
     // Blocks within which no lane's NaN count can overflow.
-    for block in values.chunks((LANES * 4) << 24) {
-        let (chunks, rest) = block.as_chunks::<{ LANES * 4 }>();
+    for (block, out) in values.chunks(LANES << 24).zip(to.chunks_mut(LANES << 24)) {
+        let (chunks, rest) = block.as_chunks::<LANES>();
+        let (outs, out_rest) = out.as_chunks_mut::<LANES>();
         // SAFETY: every x86-64 processor has SSE2 (the target's baseline).
         #[cfg(target_arch = "x86_64")]
         #[allow(unsafe_code)]
         unsafe {
-            sse2::reduce(chunks, &mut lanes);
+            sse2::copy_reduce(chunks, outs, &mut lanes);
         }
         #[cfg(not(target_arch = "x86_64"))]
-        for chunk in chunks {
-            for (i, w) in chunk.as_chunks::<4>().0.iter().enumerate() {
-                lanes.take(i, u32::from_le_bytes(*w));
+        for (chunk, o) in chunks.iter().zip(outs) {
+            for (i, (v, o)) in chunk.iter().zip(o).enumerate() {
+                *o = v.to_le_bytes();
+                lanes.take(i, v.to_bits());
             }
         }
-        for (i, w) in rest.as_chunks::<4>().0.iter().enumerate() {
-            lanes.take(i, u32::from_le_bytes(*w));
+        for (i, (v, o)) in rest.iter().zip(out_rest).enumerate() {
+            *o = v.to_le_bytes();
+            lanes.take(i, v.to_bits());
         }
         nans += lanes.nans.iter().map(|&n| u64::from(n)).sum::<u64>();
         lanes.nans = [0; LANES];
     }
-    let count = (values.len() / 4) as u64;
+    let count = values.len() as u64;
     // The least and greatest key in total order, then the type-defined zeros.
     let bounds = (nans < count).then(|| {
         let min = lanes.mins.into_iter().min().expect("lanes");
@@ -159,14 +178,25 @@ mod sse2 {
         _mm_or_si128(_mm_and_si128(mask, a), _mm_andnot_si128(mask, b))
     }
 
-    /// Loads 16 bytes.
+    /// Loads four floats' bits.
     #[target_feature(enable = "sse2")]
     #[inline]
-    fn load(bytes: &[u8; 16]) -> __m128i {
+    fn load(values: &[f32; 4]) -> __m128i {
         // SAFETY: the 16 bytes are readable; the load has no alignment requirement.
         #[allow(unsafe_code)]
         unsafe {
-            _mm_loadu_si128(bytes.as_ptr().cast())
+            _mm_loadu_si128(values.as_ptr().cast())
+        }
+    }
+
+    /// Stores four floats' bits, as their PLAIN bytes (x86-64 is little-endian).
+    #[target_feature(enable = "sse2")]
+    #[inline]
+    fn put(to: &mut [[u8; 4]; 4], v: __m128i) {
+        // SAFETY: `to` has room for 16 bytes; the store has no alignment requirement.
+        #[allow(unsafe_code)]
+        unsafe {
+            _mm_storeu_si128(to.as_mut_ptr().cast(), v);
         }
     }
 
@@ -183,9 +213,14 @@ mod sse2 {
         out
     }
 
-    /// Takes every chunk's 8 values into the lanes (their NaN counts below 2^32).
+    /// Copies every chunk's 8 values into `outs` and takes them into the lanes (their NaN
+    /// counts below 2^32).
     #[target_feature(enable = "sse2")]
-    pub(super) fn reduce(chunks: &[[u8; LANES * 4]], lanes: &mut Lanes) {
+    pub(super) fn copy_reduce(
+        chunks: &[[f32; LANES]],
+        outs: &mut [[[u8; 4]; LANES]],
+        lanes: &mut Lanes,
+    ) {
         let magnitude = _mm_set1_epi32(0x7fff_ffff);
         let infinity = _mm_set1_epi32(0x7f80_0000);
         let top = _mm_set1_epi32(i32::MAX);
@@ -193,10 +228,12 @@ mod sse2 {
         let mut mins = [top; 2];
         let mut maxs = [bottom; 2];
         let mut nans = [_mm_set1_epi32(0); 2];
-        for chunk in chunks {
-            let (halves, _) = chunk.as_chunks::<16>();
-            for (j, half) in halves.iter().enumerate() {
+        for (chunk, out) in chunks.iter().zip(outs) {
+            let (halves, _) = chunk.as_chunks::<4>();
+            let (out_halves, _) = out.as_chunks_mut::<4>();
+            for (j, (half, to)) in halves.iter().zip(out_halves).enumerate() {
                 let x = load(half);
+                put(to, x);
                 // The total-order key: a negative float's magnitude bits flipped.
                 let key = _mm_xor_si128(x, _mm_srli_epi32(_mm_srai_epi32(x, 31), 1));
                 let nan = _mm_cmpgt_epi32(_mm_and_si128(x, magnitude), infinity);
@@ -226,6 +263,8 @@ pub(super) struct FloatStatistics {
     /// `FLOAT` or `DOUBLE`.
     kind: Type,
     pages: Vec<Page>,
+    /// The page being filled, once it has values.
+    open: Option<Page>,
 }
 
 impl FloatStatistics {
@@ -234,26 +273,30 @@ impl FloatStatistics {
         FloatStatistics {
             kind,
             pages: Vec::new(),
+            open: None,
         }
     }
 
-    /// Takes the statistics of a data page: `num_values` PLAIN values, nothing else (a
-    /// column of required values has no levels).
-    pub(super) fn page(&mut self, buf: &[u8], num_values: u32) -> Result<(), ParquetError> {
-        let width = if self.kind == Type::DOUBLE { 8 } else { 4 };
-        if num_values == 0 || buf.len() != num_values as usize * width {
-            return Err(ParquetError::General(format!(
-                "a {} data page of {num_values} values in {} bytes: not PLAIN values only, \
-                 so its statistics cannot be taken from them",
-                self.kind,
-                buf.len()
-            )));
-        }
-        self.pages.push(if width == 8 {
-            reduce_f64(buf)
-        } else {
-            reduce(buf)
-        });
+    /// Copies `f32` values of the page being filled into it (`to`: their PLAIN bytes) and
+    /// takes them, in one pass.
+    pub(super) fn copy_f32(&mut self, values: &[f32], to: &mut [[u8; 4]]) {
+        let piece = copy_reduce(values, to);
+        self.open = Some(self.open.map_or(piece, |p| p.merge(piece)));
+    }
+
+    /// Takes PLAIN `f64` values of the page being filled (8 bytes each), while they are
+    /// still in cache.
+    pub(super) fn take_f64(&mut self, plain: &[u8]) {
+        let piece = reduce_f64(plain);
+        self.open = Some(self.open.map_or(piece, |p| p.merge(piece)));
+    }
+
+    /// Ends the page being filled (an error if no value was taken into it).
+    pub(super) fn end_page(&mut self) -> Result<(), ParquetError> {
+        let page = self.open.take().ok_or_else(|| {
+            ParquetError::General(format!("a {} data page of no values", self.kind))
+        })?;
+        self.pages.push(page);
         Ok(())
     }
 
@@ -465,7 +508,10 @@ mod tests {
             .iter()
             .flat_map(|&v| f64::from(v).to_le_bytes())
             .collect();
-        [reduce(&narrow), reduce_f64(&wide)].map(|p| {
+        let mut copied = vec![[0u8; 4]; values.len()];
+        let narrow_page = copy_reduce(values, &mut copied);
+        assert_eq!(copied.concat(), narrow, "the PLAIN bytes copied");
+        [narrow_page, reduce_f64(&wide)].map(|p| {
             (
                 p.bounds.map(|(lo, hi)| (lo.to_bits(), hi.to_bits())),
                 p.nans,

@@ -1378,3 +1378,165 @@ fn an_output_folder_that_is_a_file_is_an_error_not_an_endless_search() {
     assert_eq!(std::fs::read(&file).unwrap(), b"a file, not a folder");
     std::fs::remove_dir_all(&root).unwrap();
 }
+
+/// A `FLOAT` or `DOUBLE` column chunk written by [`chunk::write_float_chunk`] says what
+/// parquet-rs's own column writer says of the same values in pages of the same size: the
+/// encodings, the page encoding statistics, the values and pages counted, the offset index's
+/// rows, the statistics and the column index; and its sizes and offsets are those of its
+/// pages. The values read back are those written, split into batches anyhow.
+#[test]
+fn float_chunks_say_what_parquet_rs_says_of_the_same_pages() {
+    use parquet::basic::Compression;
+    use parquet::file::properties::EnabledStatistics;
+    use parquet::file::reader::{FileReader, SerializedFileReader};
+    use parquet::file::serialized_reader::ReadOptionsBuilder;
+    use parquet::file::writer::SerializedFileWriter;
+    use parquet::schema::parser::parse_message_type;
+
+    const PAGE: usize = 1000;
+    let schema = std::sync::Arc::new(
+        parse_message_type("message m { required float f; required double d; }").unwrap(),
+    );
+    // No NaN and no zero: there the two writers' orders differ (see the float statistics
+    // test); rising then falling pages.
+    let f: Vec<f32> = (0..2500)
+        .map(|i| {
+            if i < 1800 {
+                i as f32 + 0.5
+            } else {
+                -(i as f32)
+            }
+        })
+        .collect();
+    let d: Vec<f64> = f.iter().map(|&v| f64::from(v) * 1e100).collect();
+    let props = || {
+        std::sync::Arc::new(
+            parquet::file::properties::WriterProperties::builder()
+                .set_compression(Compression::ZSTD(
+                    parquet::basic::ZstdLevel::try_new(1).unwrap(),
+                ))
+                .set_dictionary_enabled(false)
+                .set_statistics_enabled(EnabledStatistics::Page)
+                .set_data_page_row_count_limit(PAGE)
+                .set_write_batch_size(PAGE)
+                .build(),
+        )
+    };
+    // parquet-rs's writer, given a page's values at a time.
+    let mut theirs = Vec::new();
+    {
+        let mut w = SerializedFileWriter::new(&mut theirs, schema.clone(), props()).unwrap();
+        let mut rg = w.next_row_group().unwrap();
+        let mut col = rg.next_column().unwrap().unwrap();
+        for piece in f.chunks(PAGE) {
+            col.typed::<parquet::data_type::FloatType>()
+                .write_batch(piece, None, None)
+                .unwrap();
+        }
+        col.close().unwrap();
+        let mut col = rg.next_column().unwrap().unwrap();
+        for piece in d.chunks(PAGE) {
+            col.typed::<parquet::data_type::DoubleType>()
+                .write_batch(piece, None, None)
+                .unwrap();
+        }
+        col.close().unwrap();
+        rg.close().unwrap();
+        w.close().unwrap();
+    }
+    // Ours, given batches that do not fall on pages.
+    let cuts = [0, 700, 701, 1700, 2500];
+    let batches = |v: &dyn Fn(std::ops::Range<usize>) -> crate::columns::ColumnValues| {
+        cuts.windows(2).map(|c| v(c[0]..c[1])).collect::<Vec<_>>()
+    };
+    let f_batches = batches(&|r| crate::columns::ColumnValues::Float(f[r].to_vec()));
+    let d_batches = batches(&|r| crate::columns::ColumnValues::Double(d[r].to_vec()));
+    let mut ours = Vec::new();
+    {
+        let mut w = SerializedFileWriter::new(&mut ours, schema.clone(), props()).unwrap();
+        let mut rg = w.next_row_group().unwrap();
+        let descrs = parquet::schema::types::SchemaDescriptor::new(schema.clone());
+        for (i, b) in [&f_batches, &d_batches].into_iter().enumerate() {
+            let descr = descrs.column(i);
+            chunk::write_float_chunk(&mut rg, descr, PAGE, true, 1, b.iter()).unwrap();
+        }
+        rg.close().unwrap();
+        w.close().unwrap();
+    }
+    let open = |bytes: &Vec<u8>| {
+        SerializedFileReader::new_with_options(
+            bytes::Bytes::from(bytes.clone()),
+            ReadOptionsBuilder::new().with_page_index().build(),
+        )
+        .unwrap()
+    };
+    let ours_bytes = ours.clone();
+    let (theirs, ours) = (open(&theirs), open(&ours));
+    let (tm, om) = (theirs.metadata(), ours.metadata());
+    for c in 0..2 {
+        let (t, o) = (tm.row_group(0).column(c), om.row_group(0).column(c));
+        assert_eq!(
+            o.encodings().collect::<Vec<_>>(),
+            t.encodings().collect::<Vec<_>>()
+        );
+        assert_eq!(
+            o.page_encoding_stats(),
+            t.page_encoding_stats(),
+            "column {c}"
+        );
+        assert_eq!(o.num_values(), t.num_values(), "column {c}");
+        assert_eq!(o.compression(), t.compression(), "column {c}");
+        assert_eq!(o.statistics(), t.statistics(), "column {c}");
+        assert_eq!(o.dictionary_page_offset(), None);
+        let (tp, op) = (
+            tm.page_index_for_row_group(0),
+            om.page_index_for_row_group(0),
+        );
+        let (ti, oi) = (tp.offset_index(c).unwrap(), op.offset_index(c).unwrap());
+        let rows = |ix: &parquet::file::page_index::offset_index::OffsetIndexMetaData| {
+            ix.page_locations()
+                .iter()
+                .map(|p| p.first_row_index)
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(rows(oi), vec![0, 1000, 2000], "column {c}");
+        assert_eq!(rows(oi), rows(ti), "column {c}");
+        let pages = oi.page_locations();
+        assert_eq!(o.data_page_offset(), pages[0].offset, "column {c}");
+        assert_eq!(
+            o.compressed_size(),
+            pages
+                .iter()
+                .map(|p| i64::from(p.compressed_page_size))
+                .sum::<i64>(),
+            "column {c}"
+        );
+        assert!(op.column_index(c).is_some(), "column {c}: a column index");
+        assert_eq!(op.column_index(c), tp.column_index(c), "column {c}");
+    }
+    // The values, through parquet-rs's Arrow reader.
+    let batches: Vec<RecordBatch> =
+        ParquetRecordBatchReaderBuilder::try_new(bytes::Bytes::from(ours_bytes))
+            .unwrap()
+            .build()
+            .unwrap()
+            .map(Result::unwrap)
+            .collect();
+    let got_f: Vec<f32> = batches
+        .iter()
+        .flat_map(|b| {
+            arrow_array::cast::AsArray::as_primitive::<arrow_array::types::Float32Type>(b.column(0))
+                .values()
+                .to_vec()
+        })
+        .collect();
+    let got_d: Vec<f64> = batches
+        .iter()
+        .flat_map(|b| {
+            arrow_array::cast::AsArray::as_primitive::<arrow_array::types::Float64Type>(b.column(1))
+                .values()
+                .to_vec()
+        })
+        .collect();
+    assert_eq!((got_f, got_d), (f, d));
+}
