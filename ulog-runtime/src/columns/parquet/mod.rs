@@ -23,6 +23,10 @@
 //!
 //! The Arrow schema stored with the file also carries each column's ULog type
 //! (`ulog.type`).
+//!
+//! Column chunks are ZSTD-compressed pages of 1 MiB at most: PLAIN values, but
+//! DELTA_BINARY_PACKED for `INT64` columns (timestamps and other 64-bit integers, whose
+//! deltas are small); every reader of Parquet reads both (pyarrow, DuckDB, Polars, Spark).
 
 mod chunk;
 mod convert;
@@ -128,10 +132,15 @@ impl ParquetOptions {
     /// itself, their statistics in the type-defined order ([`statistics`]), with a column
     /// index or not (unless a dictionary is asked for: their pages are PLAIN values).
     fn chunk_properties(&self) -> chunk::ChunkProperties {
+        let uncompressed = || {
+            self.builder(Vec::new())
+                .set_compression(Compression::UNCOMPRESSED)
+        };
         chunk::ChunkProperties {
-            parquet: std::sync::Arc::new(
-                self.builder(Vec::new())
-                    .set_compression(Compression::UNCOMPRESSED)
+            parquet: std::sync::Arc::new(uncompressed().build()),
+            int64: std::sync::Arc::new(
+                uncompressed()
+                    .set_encoding(parquet::basic::Encoding::DELTA_BINARY_PACKED)
                     .build(),
             ),
             float: (!self.dictionary).then_some(self.page_statistics),

@@ -1540,3 +1540,113 @@ fn float_chunks_say_what_parquet_rs_says_of_the_same_pages() {
         .collect();
     assert_eq!((got_f, got_d), (f, d));
 }
+
+/// `INT64` columns (64-bit integers, signed or not, and the timestamps) are
+/// DELTA_BINARY_PACKED, and every bit pattern comes back: the extremes next to each other
+/// (deltas that wrap), in several pages and row groups; their statistics in each one's
+/// order (unsigned for `uint64_t`).
+#[test]
+fn sixty_four_bit_integers_of_any_bits_come_back_delta_encoded() {
+    use arrow_array::Int64Array;
+    use parquet::basic::Encoding;
+    use parquet::file::statistics::Statistics;
+
+    #[derive(ULog)]
+    struct Wide {
+        timestamp: u64,
+        u: u64,
+        i: i64,
+    }
+    let pattern_u = [0, u64::MAX, 1, u64::MAX - 1, 1 << 63, (1 << 63) - 1, 12_345];
+    let pattern_i = [i64::MIN, i64::MAX, 0, -1, 1, i64::MIN + 1, -987_654_321];
+    let rows = 300_000u64;
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    let topic = w.topic::<Wide>(0).unwrap();
+    let mut want = (Vec::new(), Vec::new(), Vec::new());
+    for k in 0..rows {
+        let row = Wide {
+            // Rising, with jumps of every size.
+            timestamp: k * 1000 + (k % 7) * (k % 13),
+            u: pattern_u[(k % 7) as usize].wrapping_add(k / 7),
+            i: pattern_i[(k % 7) as usize].wrapping_add((k / 7) as i64),
+        };
+        want.0.push(row.timestamp);
+        want.1.push(row.u);
+        want.2.push(row.i);
+        w.write(&topic, &row).unwrap();
+    }
+    let bytes = w.into_inner();
+    let root = temp("int64-delta");
+    let conv = Converter::new(
+        &root,
+        ParquetOptions {
+            // Several row groups.
+            buffer_bytes: 2 << 20,
+            ..ParquetOptions::default()
+        },
+    )
+    .convert_reader(&bytes[..], "wide.ulg")
+    .unwrap();
+    let path = &conv.files[0].path;
+    let (batches, _, row_groups) = read(path);
+    assert!(row_groups > 1, "{row_groups} row groups");
+    let timestamps: Vec<u64> = column::<UInt64Array>(&batches, "timestamp")
+        .iter()
+        .flat_map(|a| a.values().to_vec())
+        .collect();
+    let us: Vec<u64> = column::<UInt64Array>(&batches, "u")
+        .iter()
+        .flat_map(|a| a.values().to_vec())
+        .collect();
+    let is: Vec<i64> = column::<Int64Array>(&batches, "i")
+        .iter()
+        .flat_map(|a| a.values().to_vec())
+        .collect();
+    assert_eq!((timestamps, us, is), want);
+    let reader =
+        parquet::file::reader::SerializedFileReader::new(std::fs::File::open(path).unwrap())
+            .unwrap();
+    let meta = parquet::file::reader::FileReader::metadata(&reader);
+    let mut start = 0usize;
+    for g in meta.row_groups() {
+        let n = g.num_rows() as usize;
+        for (c, name) in ["timestamp", "u", "i"].iter().enumerate() {
+            let chunk = g.column(c);
+            assert!(
+                chunk
+                    .encodings()
+                    .any(|e| e == Encoding::DELTA_BINARY_PACKED),
+                "{name}: {:?}",
+                chunk.encodings().collect::<Vec<_>>()
+            );
+            let (lo, hi) = match chunk.statistics().unwrap() {
+                // `uint64_t` in an INT64 column: the bounds are the unsigned ones, their bits.
+                Statistics::Int64(s) => (*s.min_opt().unwrap(), *s.max_opt().unwrap()),
+                other => panic!("{name}: {other:?}"),
+            };
+            let range = start..start + n;
+            let (want_lo, want_hi) = match c {
+                0 => (
+                    want.0[range.clone()].iter().min().copied().unwrap() as i64,
+                    want.0[range].iter().max().copied().unwrap() as i64,
+                ),
+                1 => (
+                    want.1[range.clone()].iter().min().copied().unwrap() as i64,
+                    want.1[range].iter().max().copied().unwrap() as i64,
+                ),
+                _ => (
+                    want.2[range.clone()].iter().min().copied().unwrap(),
+                    want.2[range].iter().max().copied().unwrap(),
+                ),
+            };
+            assert_eq!(
+                (lo, hi),
+                (want_lo, want_hi),
+                "{name}: row group from {start}"
+            );
+        }
+        start += n;
+    }
+    assert_eq!(start, rows as usize);
+    std::fs::remove_dir_all(&root).unwrap();
+}
