@@ -6,6 +6,10 @@
 //! reading thread encodes batches too rather than wait for it, and it helps with the last
 //! ones once it has read everything.
 //!
+//! The log file's SHA-256 can be taken here too ([`Encoder::hash`]): its bytes, copied as
+//! they are read, are hashed in order by whichever thread is free, so that on two cores the
+//! reading thread, which sets the pace, does not hash the whole file itself.
+//!
 //! Where row groups fall is decided as the batches are given, from the bytes their rows
 //! take once columns, never from how far the threads have got: when the rows given and not
 //! yet planned into a row group pass the budget, the table holding most of them per column
@@ -97,14 +101,33 @@ struct Shared<W: Output> {
 
 struct State<W: Output> {
     slots: Vec<Slot<W>>,
-    /// Tables with batches waiting and no worker on them.
+    /// Tables with batches waiting and no worker on them ([`HASH`]: the hash).
     ready: VecDeque<usize>,
+    hash: Hash,
     in_flight: usize,
     /// The sum of the slots' `unplanned`.
     unplanned: usize,
     /// No batch will come any more.
     done: bool,
     failure: Option<Failure>,
+}
+
+/// `ready`'s name of the hash.
+const HASH: usize = usize::MAX;
+
+/// Hashed buffers kept to be filled again.
+const FREE_BUFFERS: usize = 4;
+
+/// The file's bytes to hash, in the order they were read, and the hash so far (when no
+/// thread holds it).
+struct Hash {
+    queue: VecDeque<Vec<u8>>,
+    /// Buffers hashed, to be filled again (not made anew: the pages of a new one are
+    /// faulted in and zeroed by the kernel).
+    free: Vec<Vec<u8>>,
+    sha: Option<sha2::Sha256>,
+    /// Whether it is in `ready`.
+    queued: bool,
 }
 
 struct Slot<W: Output> {
@@ -137,6 +160,12 @@ impl<W: Output> Encoder<W> {
                 state: Mutex::new(State {
                     slots: Vec::new(),
                     ready: VecDeque::new(),
+                    hash: Hash {
+                        queue: VecDeque::new(),
+                        free: Vec::new(),
+                        sha: Some(sha2::Digest::new()),
+                        queued: false,
+                    },
                     in_flight: 0,
                     unplanned: 0,
                     done: false,
@@ -183,23 +212,7 @@ impl<W: Output> Encoder<W> {
     /// (inline) or by a worker (waiting while too many bytes are in flight). The first
     /// failure of any table is returned from then on.
     pub(super) fn push(&self, t: usize, batch: RowBatch) -> Result<(), Stopped> {
-        let mut st = self.lock();
-        while self.threads > 0 && st.in_flight > self.shared.in_flight_limit && st.failure.is_none()
-        {
-            // Rather than wait for the workers, encode a batch of theirs on this thread.
-            let (next, worked) = self.step(st)?;
-            st = if worked {
-                next
-            } else {
-                self.shared
-                    .room
-                    .wait(next)
-                    .unwrap_or_else(std::sync::PoisonError::into_inner)
-            };
-        }
-        if st.failure.is_some() {
-            return Err(Stopped);
-        }
+        let mut st = self.room()?;
         let bytes = batch.rows() * batch.spec().stored_row_size();
         st.in_flight += batch.memory();
         st.slots[t].unplanned += bytes;
@@ -229,6 +242,50 @@ impl<W: Output> Encoder<W> {
             }
         }
         Ok(())
+    }
+
+    /// The state once the bytes in flight are within their bound: until then this thread
+    /// does the workers' work rather than wait for them. [`Stopped`] once a table failed.
+    fn room(&self) -> Result<MutexGuard<'_, State<W>>, Stopped> {
+        let mut st = self.lock();
+        while self.threads > 0 && st.in_flight > self.shared.in_flight_limit && st.failure.is_none()
+        {
+            let (next, worked) = self.step(st)?;
+            st = if worked {
+                next
+            } else {
+                self.shared
+                    .room
+                    .wait(next)
+                    .unwrap_or_else(std::sync::PoisonError::into_inner)
+            };
+        }
+        if st.failure.is_some() {
+            return Err(Stopped);
+        }
+        Ok(st)
+    }
+
+    /// Gives the hash the file's next bytes (with workers only: inline, the caller hashes
+    /// them itself).
+    pub(super) fn hash(&self, bytes: &[u8]) -> Result<(), Stopped> {
+        debug_assert!(self.threads > 0, "hashed by workers");
+        let mut copy = self.lock().hash.free.pop().unwrap_or_default();
+        copy.clear();
+        copy.extend_from_slice(bytes);
+        let bytes = copy;
+        let mut st = self.room()?;
+        st.in_flight += bytes.len();
+        st.hash.queue.push_back(bytes);
+        st.requeue_hash(&self.shared.work);
+        Ok(())
+    }
+
+    /// The hash of every byte given to [`Encoder::hash`], once the workers have stopped.
+    pub(super) fn take_hash(&self) -> sha2::Sha256 {
+        let mut st = self.lock();
+        debug_assert!(st.hash.queue.is_empty(), "every byte hashed");
+        st.hash.sha.take().expect("no worker holds the hash")
     }
 
     /// A worker: encodes ready tables until [`Encoder::finish`] and no batch is left. The
@@ -266,6 +323,9 @@ impl<W: Output> Encoder<W> {
         let Some(t) = st.ready.pop_front() else {
             return Ok((st, false));
         };
+        if t == HASH {
+            return Ok((self.hash_step(st), true));
+        }
         let slot = &mut st.slots[t];
         slot.queued = false;
         // A table is ready only while no worker holds it (`enqueue`, `requeue`).
@@ -291,6 +351,30 @@ impl<W: Output> Encoder<W> {
         }
         st.requeue(t, &self.shared.work);
         Ok((st, true))
+    }
+
+    /// One step of the hash: its next bytes.
+    fn hash_step<'a>(&'a self, mut st: MutexGuard<'a, State<W>>) -> MutexGuard<'a, State<W>> {
+        st.hash.queued = false;
+        // The hash is ready only while no thread holds it (`requeue_hash`).
+        let mut sha = st.hash.sha.take().expect("a ready hash is idle");
+        let bytes = st.hash.queue.pop_front();
+        drop(st);
+        let n = bytes.as_ref().map_or(0, |b| {
+            sha2::Digest::update(&mut sha, b);
+            b.len()
+        });
+        let mut st = self.lock();
+        if let Some(b) = bytes
+            && st.hash.free.len() < FREE_BUFFERS
+        {
+            st.hash.free.push(b);
+        }
+        st.in_flight -= n;
+        self.shared.room.notify_all();
+        st.hash.sha = Some(sha);
+        st.requeue_hash(&self.shared.work);
+        st
     }
 
     fn wake_all(&self) {
@@ -332,6 +416,16 @@ impl<W: Output> State<W> {
         if !slot.queue.is_empty() && !slot.queued && slot.work.is_some() {
             slot.queued = true;
             self.ready.push_back(t);
+            work.notify_one();
+        }
+    }
+
+    /// Makes the idle hash ready again if bytes came for it meanwhile.
+    fn requeue_hash(&mut self, work: &Condvar) {
+        let hash = &mut self.hash;
+        if !hash.queue.is_empty() && !hash.queued && hash.sha.is_some() {
+            hash.queued = true;
+            self.ready.push_back(HASH);
             work.notify_one();
         }
     }

@@ -1308,7 +1308,8 @@ fn float_statistics_are_in_the_type_defined_order_and_those_of_the_values() {
 }
 
 /// A log file's SHA-256 is the same however it is taken: as the file is read (no encoder
-/// thread, or one), or on a thread of its own (two encoders or more).
+/// thread), by the encoder's thread from copies of what was read (one), or on a thread of
+/// its own (two encoders or more).
 #[test]
 fn a_files_sha256_is_the_same_hashed_as_read_or_on_a_thread_of_its_own() {
     let bytes = log_bytes(3000);
