@@ -18,7 +18,7 @@
 //! runs). Here a page's `f32`s are reduced in SSE2 lanes on x86-64 (a portable loop
 //! elsewhere) as they are copied into their page: the vector minimum and maximum of floats
 //! leave NaN out by their operands' order, and a zero bound's sign is put right after (a
-//! fifth of the instructions that integer keys in the IEEE 754 total order took).
+//! quarter of the instructions a value that integer keys in the IEEE 754 total order took).
 
 use std::io::Write;
 
