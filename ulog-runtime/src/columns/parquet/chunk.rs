@@ -20,7 +20,7 @@ use std::cell::RefCell;
 use std::io::Write;
 
 use bytes::Bytes;
-use parquet::basic::{Compression, Encoding, EncodingMask, PageType, Type, ZstdLevel};
+use parquet::basic::{Compression, Encoding, EncodingMask, PageType, SortOrder, Type, ZstdLevel};
 use parquet::column::page::{CompressedPage, Page, PageWriteSpec, PageWriter};
 use parquet::column::writer::{ColumnCloseResult, ColumnWriter, get_column_writer};
 use parquet::data_type::ByteArray;
@@ -30,6 +30,7 @@ use parquet::file::properties::{WriterProperties, WriterPropertiesPtr};
 use parquet::file::writer::{SerializedPageWriter, SerializedRowGroupWriter, TrackedWrite};
 use parquet::schema::types::ColumnDescPtr;
 
+use super::int64;
 use super::statistics::FloatStatistics;
 use crate::columns::ColumnValues;
 
@@ -37,14 +38,14 @@ use crate::columns::ColumnValues;
 pub(super) struct ChunkProperties {
     /// For the columns whose statistics parquet-rs takes.
     pub(super) parquet: WriterPropertiesPtr,
-    /// For `INT64` columns (the timestamps, 64-bit fields): the same, their values
-    /// DELTA_BINARY_PACKED (8 bytes a timestamp PLAIN took ZSTD as much CPU as all other
-    /// columns together on the benchmark log; packed deltas halved its files and took 8%
-    /// less CPU).
+    /// For `INT64` columns written by parquet-rs (with a dictionary): the same, their
+    /// values DELTA_BINARY_PACKED where the dictionary gives up, as [`write_int64_chunk`]
+    /// writes them.
     pub(super) int64: WriterPropertiesPtr,
-    /// Whether `FLOAT` and `DOUBLE` columns' pages are made here ([`write_float_chunk`]:
-    /// the values PLAIN, no dictionary), and if so whether a column index is made.
-    pub(super) float: Option<bool>,
+    /// Whether `FLOAT`, `DOUBLE` and `INT64` columns' pages are made here
+    /// ([`write_float_chunk`], [`write_int64_chunk`]: no dictionary), and if so whether a
+    /// column index is made.
+    pub(super) own_pages: Option<bool>,
 }
 
 thread_local! {
@@ -143,12 +144,31 @@ pub(super) fn write_chunk<'b, W: Write + Send>(
     batches: impl Iterator<Item = &'b ColumnValues>,
 ) -> Result<(), ParquetError> {
     let kind = descr.physical_type();
-    if let Some(page_index) = props
-        .float
-        .filter(|_| matches!(kind, Type::FLOAT | Type::DOUBLE))
-    {
-        let page_values = float_page_values(&props.parquet, kind);
-        return write_float_chunk(row_group, descr, page_values, page_index, level, batches);
+    if let Some(page_index) = props.own_pages {
+        let page_values = page_values(&props.parquet, kind);
+        match kind {
+            Type::FLOAT | Type::DOUBLE => {
+                return write_float_chunk(
+                    row_group,
+                    descr,
+                    page_values,
+                    page_index,
+                    level,
+                    batches,
+                );
+            }
+            Type::INT64 => {
+                return write_int64_chunk(
+                    row_group,
+                    descr,
+                    page_values,
+                    page_index,
+                    level,
+                    batches,
+                );
+            }
+            _ => {}
+        }
     }
     let mut out = TrackedWrite::new(Vec::new());
     let close = with_zstd(level, |zstd| {
@@ -194,10 +214,10 @@ pub(super) fn write_chunk<'b, W: Write + Send>(
     )
 }
 
-/// Values a data page of a `FLOAT` or `DOUBLE` column holds (at least one): as many as
-/// the page size limit of `props` and its row count limit allow.
-fn float_page_values(props: &WriterProperties, kind: Type) -> usize {
-    let width = if kind == Type::DOUBLE { 8 } else { 4 };
+/// Values a data page made here holds (at least one): as many as the page size limit of
+/// `props` (in the values' PLAIN bytes) and its row count limit allow.
+fn page_values(props: &WriterProperties, kind: Type) -> usize {
+    let width = if kind == Type::FLOAT { 4 } else { 8 };
     (props.data_page_size_limit() / width)
         .min(props.data_page_row_count_limit())
         .max(1)
@@ -206,9 +226,9 @@ fn float_page_values(props: &WriterProperties, kind: Type) -> usize {
 /// Writes the chunk of a `FLOAT` or `DOUBLE` column (`descr`: a required one) as
 /// [`write_chunk`] does others with parquet-rs's column writer (the same page headers and
 /// chunk metadata): data pages (version 1) of `page_values` PLAIN values each (the last
-/// one fewer),
-/// compressed at ZSTD `level`; the chunk's statistics, its offset index, and its column
-/// index if `page_index`, taken from the values as they are copied ([`FloatStatistics`]).
+/// one fewer), compressed at ZSTD `level`; the chunk's statistics, its offset index, and
+/// its column index if `page_index`, taken from the values as they are copied
+/// ([`FloatStatistics`]).
 pub(super) fn write_float_chunk<'b, W: Write + Send>(
     row_group: &mut SerializedRowGroupWriter<'_, W>,
     descr: ColumnDescPtr,
@@ -225,19 +245,12 @@ pub(super) fn write_float_chunk<'b, W: Write + Send>(
         page.resize(page_bytes, 0);
     }
     let mut pages = FloatPages {
-        out: TrackedWrite::new(Vec::new()),
+        chunk: ChunkPages::new(Encoding::PLAIN),
         stats: FloatStatistics::new(kind),
-        offsets: OffsetIndexBuilder::new(),
         page,
         page_bytes,
         filled: 0,
         width,
-        count: 0,
-        values: 0,
-        compressed: 0,
-        uncompressed: 0,
-        bytes_written: 0,
-        first_offset: None,
     };
     let written = with_zstd(level, |zstd| {
         for values in batches {
@@ -254,12 +267,7 @@ pub(super) fn write_float_chunk<'b, W: Write + Send>(
                     };
                     pages.put(v, copy, zstd)?;
                 }
-                _ => {
-                    return Err(ParquetError::General(format!(
-                        "a column of {} values given to a writer of {kind} values",
-                        values.type_name()
-                    )));
-                }
+                _ => return Err(mismatch(values, kind)),
             }
         }
         pages.flush(zstd)
@@ -268,63 +276,89 @@ pub(super) fn write_float_chunk<'b, W: Write + Send>(
     PAGE.with_borrow_mut(|p| *p = std::mem::take(&mut pages.page));
     written?;
     let (statistics, column_index) = pages.stats.finish(page_index)?;
-    let metadata = ColumnChunkMetaData::builder(descr)
-        .set_compression(Compression::ZSTD(ZstdLevel::try_new(level)?))
-        // Levels are RLE-encoded (there are none: the column is required).
-        .set_encodings_mask(EncodingMask::new_from_encodings(
-            [Encoding::PLAIN, Encoding::RLE].iter(),
-        ))
-        .set_page_encoding_stats(if pages.count == 0 {
-            Vec::new()
-        } else {
-            vec![PageEncodingStats {
-                page_type: PageType::DATA_PAGE,
-                encoding: Encoding::PLAIN,
-                count: i32::try_from(pages.count).map_err(|_| too_many("pages"))?,
-            }]
-        })
-        .set_total_compressed_size(i64::try_from(pages.compressed).map_err(|_| too_many("bytes"))?)
-        .set_total_uncompressed_size(
-            i64::try_from(pages.uncompressed).map_err(|_| too_many("bytes"))?,
-        )
-        .set_num_values(i64::try_from(pages.values).map_err(|_| too_many("values"))?)
-        .set_data_page_offset(
-            i64::try_from(pages.first_offset.unwrap_or(0)).map_err(|_| too_many("bytes"))?,
-        )
-        .set_dictionary_page_offset(None)
-        .set_statistics(statistics)
-        .build()?;
-    let chunk = Bytes::from(pages.out.into_inner()?);
-    row_group.append_column(
-        &chunk,
-        ColumnCloseResult {
-            bytes_written: pages.bytes_written,
-            rows_written: pages.values,
-            metadata,
-            bloom_filter: None,
-            column_index,
-            offset_index: Some(pages.offsets.build()),
-        },
-    )
+    pages
+        .chunk
+        .close(row_group, descr, level, statistics, column_index)
+}
+
+/// Writes the chunk of an `INT64` column (`descr`: a required one, its values `int64_t` or
+/// `uint64_t`) as [`write_float_chunk`] does a float one, its pages of `page_values`
+/// values DELTA_BINARY_PACKED ([`int64`]).
+pub(super) fn write_int64_chunk<'b, W: Write + Send>(
+    row_group: &mut SerializedRowGroupWriter<'_, W>,
+    descr: ColumnDescPtr,
+    page_values: usize,
+    page_index: bool,
+    level: i32,
+    batches: impl Iterator<Item = &'b ColumnValues>,
+) -> Result<(), ParquetError> {
+    let page_values = page_values.max(1);
+    let unsigned = descr.sort_order() == SortOrder::UNSIGNED;
+    let mut stats = int64::Int64Statistics::new(unsigned);
+    let mut chunk = ChunkPages::new(Encoding::DELTA_BINARY_PACKED);
+    let mut page: Vec<i64> = Vec::with_capacity(page_values);
+    let mut encoded = Vec::new();
+    with_zstd(level, |zstd| {
+        let mut flush = |page: &mut Vec<i64>| -> Result<(), ParquetError> {
+            if page.is_empty() {
+                return Ok(());
+            }
+            stats.page(page);
+            encoded.clear();
+            int64::encode(page, &mut encoded);
+            let num_values = u32::try_from(page.len()).map_err(|_| too_many("values"))?;
+            chunk.write(zstd, &encoded, num_values)?;
+            page.clear();
+            Ok(())
+        };
+        for values in batches {
+            // `uint64_t` values as the same bits: the column's logical type says they are
+            // unsigned.
+            let (signed, unsigned): (&[i64], &[u64]) = match values {
+                ColumnValues::Int64(v) => (v, &[]),
+                ColumnValues::UInt64(v) => (&[], v),
+                _ => return Err(mismatch(values, Type::INT64)),
+            };
+            let (mut signed, mut unsigned) = (signed, unsigned);
+            while !signed.is_empty() || !unsigned.is_empty() {
+                let room = page_values - page.len();
+                let n = signed.len().max(unsigned.len()).min(room);
+                if signed.is_empty() {
+                    page.extend(unsigned[..n].iter().map(|&x| x as i64));
+                    unsigned = &unsigned[n..];
+                } else {
+                    page.extend_from_slice(&signed[..n]);
+                    signed = &signed[n..];
+                }
+                if page.len() == page_values {
+                    flush(&mut page)?;
+                }
+            }
+        }
+        flush(&mut page)
+    })?;
+    let (statistics, column_index) = stats.finish(page_index)?;
+    chunk.close(row_group, descr, level, statistics, column_index)
+}
+
+fn mismatch(values: &ColumnValues, kind: Type) -> ParquetError {
+    ParquetError::General(format!(
+        "a column of {} values given to a writer of {kind} values",
+        values.type_name()
+    ))
 }
 
 fn too_many(what: &str) -> ParquetError {
     ParquetError::General(format!("a column chunk of more {what} than Parquet counts"))
 }
 
-/// The pages of a `FLOAT` or `DOUBLE` column chunk being written ([`write_float_chunk`]).
-struct FloatPages {
-    /// The chunk: each page's header and compressed values.
+/// The pages of a column chunk written here: each page's header and compressed values,
+/// and what the chunk's metadata and offset index say of them.
+struct ChunkPages {
     out: TrackedWrite<Vec<u8>>,
-    stats: FloatStatistics,
+    /// Every data page's.
+    encoding: Encoding,
     offsets: OffsetIndexBuilder,
-    /// The page being filled: the first `filled` of its `page_bytes` (the buffer may be
-    /// longer).
-    page: Vec<u8>,
-    page_bytes: usize,
-    filled: usize,
-    /// Bytes a value.
-    width: usize,
     /// Pages written, values in them, and their sizes (each with its header).
     count: u64,
     values: u64,
@@ -333,6 +367,115 @@ struct FloatPages {
     bytes_written: u64,
     /// Where the first page begins in the chunk.
     first_offset: Option<u64>,
+}
+
+impl ChunkPages {
+    fn new(encoding: Encoding) -> ChunkPages {
+        ChunkPages {
+            out: TrackedWrite::new(Vec::new()),
+            encoding,
+            offsets: OffsetIndexBuilder::new(),
+            count: 0,
+            values: 0,
+            compressed: 0,
+            uncompressed: 0,
+            bytes_written: 0,
+            first_offset: None,
+        }
+    }
+
+    /// Writes a data page of `num_values` values, `data` their encoded bytes (compressed
+    /// here).
+    fn write(
+        &mut self,
+        zstd: &mut zstd::bulk::Compressor<'static>,
+        data: &[u8],
+        num_values: u32,
+    ) -> Result<(), ParquetError> {
+        let page = Page::DataPage {
+            buf: Bytes::from(zstd.compress(data).map_err(zstd_error)?),
+            num_values,
+            encoding: self.encoding,
+            def_level_encoding: Encoding::RLE,
+            rep_level_encoding: Encoding::RLE,
+            statistics: None,
+        };
+        let spec = SerializedPageWriter::new(&mut self.out)
+            .write_page(CompressedPage::new(page, data.len()))?;
+        let size = i32::try_from(spec.compressed_size).map_err(|_| too_many("bytes"))?;
+        self.offsets.append_offset_and_size(
+            i64::try_from(spec.offset).map_err(|_| too_many("bytes"))?,
+            size,
+        );
+        self.offsets.append_row_count(i64::from(num_values));
+        self.first_offset.get_or_insert(spec.offset);
+        self.count += 1;
+        self.values += u64::from(num_values);
+        self.compressed += spec.compressed_size as u64;
+        self.uncompressed += spec.uncompressed_size as u64;
+        self.bytes_written += spec.bytes_written;
+        Ok(())
+    }
+
+    /// The chunk's metadata, as parquet-rs's column writer makes it, and the chunk
+    /// appended to `row_group`.
+    fn close<W: Write + Send>(
+        self,
+        row_group: &mut SerializedRowGroupWriter<'_, W>,
+        descr: ColumnDescPtr,
+        level: i32,
+        statistics: parquet::file::statistics::Statistics,
+        column_index: Option<parquet::file::page_index::column_index::ColumnIndexMetaData>,
+    ) -> Result<(), ParquetError> {
+        let bytes = |n: u64| i64::try_from(n).map_err(|_| too_many("bytes"));
+        let metadata = ColumnChunkMetaData::builder(descr)
+            .set_compression(Compression::ZSTD(ZstdLevel::try_new(level)?))
+            // Levels are RLE-encoded (there are none: the column is required).
+            .set_encodings_mask(EncodingMask::new_from_encodings(
+                [self.encoding, Encoding::RLE].iter(),
+            ))
+            .set_page_encoding_stats(if self.count == 0 {
+                Vec::new()
+            } else {
+                vec![PageEncodingStats {
+                    page_type: PageType::DATA_PAGE,
+                    encoding: self.encoding,
+                    count: i32::try_from(self.count).map_err(|_| too_many("pages"))?,
+                }]
+            })
+            .set_total_compressed_size(bytes(self.compressed)?)
+            .set_total_uncompressed_size(bytes(self.uncompressed)?)
+            .set_num_values(i64::try_from(self.values).map_err(|_| too_many("values"))?)
+            .set_data_page_offset(bytes(self.first_offset.unwrap_or(0))?)
+            .set_dictionary_page_offset(None)
+            .set_statistics(statistics)
+            .build()?;
+        let chunk = Bytes::from(self.out.into_inner()?);
+        row_group.append_column(
+            &chunk,
+            ColumnCloseResult {
+                bytes_written: self.bytes_written,
+                rows_written: self.values,
+                metadata,
+                bloom_filter: None,
+                column_index,
+                offset_index: Some(self.offsets.build()),
+            },
+        )
+    }
+}
+
+/// The pages of a `FLOAT` or `DOUBLE` column chunk being written ([`write_float_chunk`]).
+struct FloatPages {
+    chunk: ChunkPages,
+    stats: FloatStatistics,
+    /// The page being filled: the first `filled` of its `page_bytes` (the buffer may be
+    /// longer).
+    page: Vec<u8>,
+    page_bytes: usize,
+    filled: usize,
+    /// Bytes a value.
+    width: usize,
 }
 
 impl FloatPages {
@@ -365,31 +508,10 @@ impl FloatPages {
         if self.filled == 0 {
             return Ok(());
         }
-        let plain = &self.page[..self.filled];
         let num_values = u32::try_from(self.filled / self.width).map_err(|_| too_many("values"))?;
         self.stats.end_page()?;
-        let page = Page::DataPage {
-            buf: Bytes::from(zstd.compress(plain).map_err(zstd_error)?),
-            num_values,
-            encoding: Encoding::PLAIN,
-            def_level_encoding: Encoding::RLE,
-            rep_level_encoding: Encoding::RLE,
-            statistics: None,
-        };
-        let spec = SerializedPageWriter::new(&mut self.out)
-            .write_page(CompressedPage::new(page, self.filled))?;
-        let size = i32::try_from(spec.compressed_size).map_err(|_| too_many("bytes"))?;
-        self.offsets.append_offset_and_size(
-            i64::try_from(spec.offset).map_err(|_| too_many("bytes"))?,
-            size,
-        );
-        self.offsets.append_row_count(i64::from(num_values));
-        self.first_offset.get_or_insert(spec.offset);
-        self.count += 1;
-        self.values += u64::from(num_values);
-        self.compressed += spec.compressed_size as u64;
-        self.uncompressed += spec.uncompressed_size as u64;
-        self.bytes_written += spec.bytes_written;
+        self.chunk
+            .write(zstd, &self.page[..self.filled], num_values)?;
         self.filled = 0;
         Ok(())
     }

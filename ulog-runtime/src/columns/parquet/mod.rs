@@ -24,7 +24,7 @@
 //! The Arrow schema stored with the file also carries each column's ULog type
 //! (`ulog.type`).
 //!
-//! Column chunks are ZSTD-compressed pages of 1 MiB at most: PLAIN values, but
+//! Column chunks are ZSTD-compressed pages of at most 1 MiB of values: PLAIN values, but
 //! DELTA_BINARY_PACKED for `INT64` columns (timestamps and other 64-bit integers, whose
 //! deltas are small); every reader of Parquet reads both (pyarrow, DuckDB, Polars, Spark).
 
@@ -32,6 +32,7 @@ mod chunk;
 mod convert;
 mod encode;
 mod fleet;
+mod int64;
 mod statistics;
 #[cfg(test)]
 mod tests;
@@ -128,9 +129,10 @@ impl ParquetOptions {
     }
 
     /// The properties without compression, for column writers whose pages are compressed
-    /// by [`chunk`]; and whether `FLOAT` and `DOUBLE` columns are written by [`chunk`]
-    /// itself, their statistics in the type-defined order ([`statistics`]), with a column
-    /// index or not (unless a dictionary is asked for: their pages are PLAIN values).
+    /// by [`chunk`]; and whether `FLOAT`, `DOUBLE` and `INT64` columns are written by
+    /// [`chunk`] itself (floats' statistics in the type-defined order, [`statistics`];
+    /// 64-bit integers DELTA_BINARY_PACKED, [`int64`]), with a column index or not (unless
+    /// a dictionary is asked for).
     fn chunk_properties(&self) -> chunk::ChunkProperties {
         let uncompressed = || {
             self.builder(Vec::new())
@@ -143,7 +145,7 @@ impl ParquetOptions {
                     .set_encoding(parquet::basic::Encoding::DELTA_BINARY_PACKED)
                     .build(),
             ),
-            float: (!self.dictionary).then_some(self.page_statistics),
+            own_pages: (!self.dictionary).then_some(self.page_statistics),
         }
     }
 

@@ -1380,90 +1380,14 @@ fn an_output_folder_that_is_a_file_is_an_error_not_an_endless_search() {
     std::fs::remove_dir_all(&root).unwrap();
 }
 
-/// A `FLOAT` or `DOUBLE` column chunk written by [`chunk::write_float_chunk`] says what
-/// parquet-rs's own column writer says of the same values in pages of the same size: the
-/// encodings, the page encoding statistics, the values and pages counted, the offset index's
-/// rows, the statistics and the column index; and its sizes and offsets are those of its
-/// pages. The values read back are those written, split into batches anyhow.
-#[test]
-fn float_chunks_say_what_parquet_rs_says_of_the_same_pages() {
-    use parquet::basic::Compression;
-    use parquet::file::properties::EnabledStatistics;
+/// The column chunks of `ours` say what parquet-rs's own writer says in `theirs` of the
+/// same values in the same pages (one row group, pages of 1,000 values, 2,500 a column):
+/// the encodings, the page encoding statistics, the values counted, the statistics, the
+/// offset index's rows and the column index; and their sizes and offsets are those of
+/// their pages. Gives `ours`' values, read by parquet-rs's Arrow reader.
+fn assert_chunks_agree(theirs: Vec<u8>, ours: Vec<u8>, columns: usize) -> Vec<RecordBatch> {
     use parquet::file::reader::{FileReader, SerializedFileReader};
     use parquet::file::serialized_reader::ReadOptionsBuilder;
-    use parquet::file::writer::SerializedFileWriter;
-    use parquet::schema::parser::parse_message_type;
-
-    const PAGE: usize = 1000;
-    let schema = std::sync::Arc::new(
-        parse_message_type("message m { required float f; required double d; }").unwrap(),
-    );
-    // No NaN and no zero: there the two writers' orders differ (see the float statistics
-    // test); rising then falling pages.
-    let f: Vec<f32> = (0..2500)
-        .map(|i| {
-            if i < 1800 {
-                i as f32 + 0.5
-            } else {
-                -(i as f32)
-            }
-        })
-        .collect();
-    let d: Vec<f64> = f.iter().map(|&v| f64::from(v) * 1e100).collect();
-    let props = || {
-        std::sync::Arc::new(
-            parquet::file::properties::WriterProperties::builder()
-                .set_compression(Compression::ZSTD(
-                    parquet::basic::ZstdLevel::try_new(1).unwrap(),
-                ))
-                .set_dictionary_enabled(false)
-                .set_statistics_enabled(EnabledStatistics::Page)
-                .set_data_page_row_count_limit(PAGE)
-                .set_write_batch_size(PAGE)
-                .build(),
-        )
-    };
-    // parquet-rs's writer, given a page's values at a time.
-    let mut theirs = Vec::new();
-    {
-        let mut w = SerializedFileWriter::new(&mut theirs, schema.clone(), props()).unwrap();
-        let mut rg = w.next_row_group().unwrap();
-        let mut col = rg.next_column().unwrap().unwrap();
-        for piece in f.chunks(PAGE) {
-            col.typed::<parquet::data_type::FloatType>()
-                .write_batch(piece, None, None)
-                .unwrap();
-        }
-        col.close().unwrap();
-        let mut col = rg.next_column().unwrap().unwrap();
-        for piece in d.chunks(PAGE) {
-            col.typed::<parquet::data_type::DoubleType>()
-                .write_batch(piece, None, None)
-                .unwrap();
-        }
-        col.close().unwrap();
-        rg.close().unwrap();
-        w.close().unwrap();
-    }
-    // Ours, given batches that do not fall on pages.
-    let cuts = [0, 700, 701, 1700, 2500];
-    let batches = |v: &dyn Fn(std::ops::Range<usize>) -> crate::columns::ColumnValues| {
-        cuts.windows(2).map(|c| v(c[0]..c[1])).collect::<Vec<_>>()
-    };
-    let f_batches = batches(&|r| crate::columns::ColumnValues::Float(f[r].to_vec()));
-    let d_batches = batches(&|r| crate::columns::ColumnValues::Double(d[r].to_vec()));
-    let mut ours = Vec::new();
-    {
-        let mut w = SerializedFileWriter::new(&mut ours, schema.clone(), props()).unwrap();
-        let mut rg = w.next_row_group().unwrap();
-        let descrs = parquet::schema::types::SchemaDescriptor::new(schema.clone());
-        for (i, b) in [&f_batches, &d_batches].into_iter().enumerate() {
-            let descr = descrs.column(i);
-            chunk::write_float_chunk(&mut rg, descr, PAGE, true, 1, b.iter()).unwrap();
-        }
-        rg.close().unwrap();
-        w.close().unwrap();
-    }
     let open = |bytes: &Vec<u8>| {
         SerializedFileReader::new_with_options(
             bytes::Bytes::from(bytes.clone()),
@@ -1471,14 +1395,14 @@ fn float_chunks_say_what_parquet_rs_says_of_the_same_pages() {
         )
         .unwrap()
     };
-    let ours_bytes = ours.clone();
-    let (theirs, ours) = (open(&theirs), open(&ours));
-    let (tm, om) = (theirs.metadata(), ours.metadata());
-    for c in 0..2 {
+    let (t_file, o_file) = (open(&theirs), open(&ours));
+    let (tm, om) = (t_file.metadata(), o_file.metadata());
+    for c in 0..columns {
         let (t, o) = (tm.row_group(0).column(c), om.row_group(0).column(c));
         assert_eq!(
             o.encodings().collect::<Vec<_>>(),
-            t.encodings().collect::<Vec<_>>()
+            t.encodings().collect::<Vec<_>>(),
+            "column {c}"
         );
         assert_eq!(
             o.page_encoding_stats(),
@@ -1515,15 +1439,138 @@ fn float_chunks_say_what_parquet_rs_says_of_the_same_pages() {
         assert!(op.column_index(c).is_some(), "column {c}: a column index");
         assert_eq!(op.column_index(c), tp.column_index(c), "column {c}");
     }
-    // The values, through parquet-rs's Arrow reader.
-    let batches: Vec<RecordBatch> =
-        ParquetRecordBatchReaderBuilder::try_new(bytes::Bytes::from(ours_bytes))
-            .unwrap()
-            .build()
-            .unwrap()
-            .map(Result::unwrap)
-            .collect();
-    let got_f: Vec<f32> = batches
+    ParquetRecordBatchReaderBuilder::try_new(bytes::Bytes::from(ours))
+        .unwrap()
+        .build()
+        .unwrap()
+        .map(Result::unwrap)
+        .collect()
+}
+
+/// parquet-rs's writer properties for [`assert_chunks_agree`]: pages of 1,000 values, ZSTD.
+fn thousand_value_pages(
+    encoding: Option<parquet::basic::Encoding>,
+) -> std::sync::Arc<parquet::file::properties::WriterProperties> {
+    use parquet::basic::Compression;
+    use parquet::file::properties::EnabledStatistics;
+    let mut b = parquet::file::properties::WriterProperties::builder()
+        .set_compression(Compression::ZSTD(
+            parquet::basic::ZstdLevel::try_new(1).unwrap(),
+        ))
+        .set_dictionary_enabled(false)
+        .set_statistics_enabled(EnabledStatistics::Page)
+        .set_data_page_row_count_limit(1000)
+        .set_write_batch_size(1000);
+    if let Some(e) = encoding {
+        b = b.set_encoding(e);
+    }
+    std::sync::Arc::new(b.build())
+}
+
+/// Batches of `v` cut where pages are not (at 700, 701 and 1,700 of 2,500).
+fn uneven_batches<T: Clone>(
+    v: &[T],
+    make: impl Fn(Vec<T>) -> crate::columns::ColumnValues,
+) -> Vec<crate::columns::ColumnValues> {
+    [0, 700, 701, 1700, 2500]
+        .windows(2)
+        .map(|c| make(v[c[0]..c[1]].to_vec()))
+        .collect()
+}
+
+/// A file of one row group written by parquet-rs's column writers, given a page's values
+/// at a time (`write(column index, writer)` writes each column).
+fn written_by_parquet_rs(
+    schema: &std::sync::Arc<parquet::schema::types::Type>,
+    props: std::sync::Arc<parquet::file::properties::WriterProperties>,
+    columns: usize,
+    write: impl Fn(usize, &mut parquet::file::writer::SerializedColumnWriter<'_>),
+) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut w =
+        parquet::file::writer::SerializedFileWriter::new(&mut out, schema.clone(), props).unwrap();
+    let mut rg = w.next_row_group().unwrap();
+    for c in 0..columns {
+        let mut col = rg.next_column().unwrap().unwrap();
+        write(c, &mut col);
+        col.close().unwrap();
+    }
+    rg.close().unwrap();
+    w.close().unwrap();
+    out
+}
+
+/// A file of one row group whose chunks `write` writes here.
+fn written_here(
+    schema: &std::sync::Arc<parquet::schema::types::Type>,
+    props: std::sync::Arc<parquet::file::properties::WriterProperties>,
+    columns: usize,
+    write: impl Fn(
+        usize,
+        &mut parquet::file::writer::SerializedRowGroupWriter<'_, &mut Vec<u8>>,
+        parquet::schema::types::ColumnDescPtr,
+    ),
+) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut w =
+        parquet::file::writer::SerializedFileWriter::new(&mut out, schema.clone(), props).unwrap();
+    let mut rg = w.next_row_group().unwrap();
+    let descrs = parquet::schema::types::SchemaDescriptor::new(schema.clone());
+    for c in 0..columns {
+        write(c, &mut rg, descrs.column(c));
+    }
+    rg.close().unwrap();
+    w.close().unwrap();
+    out
+}
+
+/// A `FLOAT` or `DOUBLE` column chunk written by [`chunk::write_float_chunk`] says what
+/// parquet-rs's own column writer says of the same values in pages of the same size
+/// ([`assert_chunks_agree`]), and the values read back are those written, split into
+/// batches anyhow.
+#[test]
+fn float_chunks_say_what_parquet_rs_says_of_the_same_pages() {
+    use parquet::data_type::{DoubleType, FloatType};
+    use parquet::schema::parser::parse_message_type;
+
+    let schema = std::sync::Arc::new(
+        parse_message_type("message m { required float f; required double d; }").unwrap(),
+    );
+    // No NaN and no zero: there the two writers' orders differ (see the float statistics
+    // test); rising then falling pages.
+    let f: Vec<f32> = (0..2500)
+        .map(|i| {
+            if i < 1800 {
+                i as f32 + 0.5
+            } else {
+                -(i as f32)
+            }
+        })
+        .collect();
+    let d: Vec<f64> = f.iter().map(|&v| f64::from(v) * 1e100).collect();
+    let theirs = written_by_parquet_rs(&schema, thousand_value_pages(None), 2, |c, col| {
+        for k in (0..2500).step_by(1000) {
+            let end = (k + 1000).min(2500);
+            if c == 0 {
+                col.typed::<FloatType>()
+                    .write_batch(&f[k..end], None, None)
+                    .unwrap();
+            } else {
+                col.typed::<DoubleType>()
+                    .write_batch(&d[k..end], None, None)
+                    .unwrap();
+            }
+        }
+    });
+    let batches = [
+        uneven_batches(&f, crate::columns::ColumnValues::Float),
+        uneven_batches(&d, crate::columns::ColumnValues::Double),
+    ];
+    let ours = written_here(&schema, thousand_value_pages(None), 2, |c, rg, descr| {
+        chunk::write_float_chunk(rg, descr, 1000, true, 1, batches[c].iter()).unwrap();
+    });
+    let read = assert_chunks_agree(theirs, ours, 2);
+    let got_f: Vec<f32> = read
         .iter()
         .flat_map(|b| {
             arrow_array::cast::AsArray::as_primitive::<arrow_array::types::Float32Type>(b.column(0))
@@ -1531,7 +1578,7 @@ fn float_chunks_say_what_parquet_rs_says_of_the_same_pages() {
                 .to_vec()
         })
         .collect();
-    let got_d: Vec<f64> = batches
+    let got_d: Vec<f64> = read
         .iter()
         .flat_map(|b| {
             arrow_array::cast::AsArray::as_primitive::<arrow_array::types::Float64Type>(b.column(1))
@@ -1540,6 +1587,73 @@ fn float_chunks_say_what_parquet_rs_says_of_the_same_pages() {
         })
         .collect();
     assert_eq!((got_f, got_d), (f, d));
+}
+
+/// An `INT64` column chunk written by [`chunk::write_int64_chunk`] (DELTA_BINARY_PACKED)
+/// says what parquet-rs's own column writer says of the same values in pages of the same
+/// size with the same encoding ([`assert_chunks_agree`]: unsigned bounds for a `uint64_t`
+/// column), and every bit pattern comes back: the extremes next to each other (deltas that
+/// wrap), runs of one value (deltas of no width), a last block and miniblock cut short.
+#[test]
+fn int64_chunks_say_what_parquet_rs_says_of_the_same_pages() {
+    use parquet::basic::Encoding;
+    use parquet::data_type::Int64Type;
+    use parquet::schema::parser::parse_message_type;
+
+    let schema = std::sync::Arc::new(
+        parse_message_type(
+            "message m { required int64 s; required int64 u (INTEGER(64, false)); }",
+        )
+        .unwrap(),
+    );
+    let odd = [i64::MIN, i64::MAX, 0, -1, 1, i64::MIN + 1, 5];
+    let s: Vec<i64> = (0..2500i64)
+        .map(|i| match i {
+            // Rising pages, then extremes, then a run of one value.
+            0..1000 => i * 1000 + (i % 7) * 13,
+            1000..2000 => odd[(i % 7) as usize].wrapping_add(i),
+            _ => 42,
+        })
+        .collect();
+    let u: Vec<u64> = s.iter().map(|&v| v as u64).collect();
+    let as_i64: Vec<i64> = u.iter().map(|&v| v as i64).collect();
+    let delta = || thousand_value_pages(Some(Encoding::DELTA_BINARY_PACKED));
+    let theirs = written_by_parquet_rs(&schema, delta(), 2, |c, col| {
+        let v = if c == 0 { &s } else { &as_i64 };
+        for k in (0..2500).step_by(1000) {
+            let end = (k + 1000).min(2500);
+            col.typed::<Int64Type>()
+                .write_batch(&v[k..end], None, None)
+                .unwrap();
+        }
+    });
+    let batches = [
+        uneven_batches(&s, crate::columns::ColumnValues::Int64),
+        uneven_batches(&u, crate::columns::ColumnValues::UInt64),
+    ];
+    let ours = written_here(&schema, delta(), 2, |c, rg, descr| {
+        chunk::write_int64_chunk(rg, descr, 1000, true, 1, batches[c].iter()).unwrap();
+    });
+    let read = assert_chunks_agree(theirs, ours, 2);
+    let column = |c: usize| -> Vec<i64> {
+        read.iter()
+            .flat_map(|b| {
+                let col = b.column(c);
+                arrow_array::cast::AsArray::as_primitive_opt::<arrow_array::types::Int64Type>(col)
+                    .map(|a| a.values().to_vec())
+                    .unwrap_or_else(|| {
+                        arrow_array::cast::AsArray::as_primitive::<arrow_array::types::UInt64Type>(
+                            col,
+                        )
+                        .values()
+                        .iter()
+                        .map(|&v| v as i64)
+                        .collect()
+                    })
+            })
+            .collect()
+    };
+    assert_eq!((column(0), column(1)), (s, as_i64));
 }
 
 /// `INT64` columns (64-bit integers, signed or not, and the timestamps) are
