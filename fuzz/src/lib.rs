@@ -749,7 +749,9 @@ fn read_all<T: parquet::data_type::DataType>(
 
 /// The Parquet writer over the whole-file reader: every topic instance that can be read is
 /// written (to memory, in row groups of a few batches), reads back with as many rows and row
-/// groups as the writer says, and each `FLOAT` and `DOUBLE` column chunk's statistics are
+/// groups as the writer says, each `INT64` column chunk (DELTA_BINARY_PACKED) reads back
+/// with the bounds of its values in the column's order, and each `FLOAT` and `DOUBLE`
+/// column chunk's statistics are
 /// those of its values in the type-defined order the footer gives them (NaN left out, none
 /// if there is nothing else; a zero minimum -0.0, a zero maximum +0.0; NaN counted).
 pub fn parquet(data: &[u8]) {
@@ -801,6 +803,30 @@ pub fn parquet(data: &[u8]) {
                 let chunk = meta.row_group(g).column(c);
                 let rows = chunk.num_values() as usize;
                 let values: Vec<f64> = match group.get_column_reader(c) {
+                    Ok(ColumnReader::Int64ColumnReader(mut reader)) => {
+                        // DELTA_BINARY_PACKED values back, their bounds in the column's
+                        // order (unsigned for `uint64_t`).
+                        let values = read_all(&mut reader, rows, name);
+                        let unsigned = meta.file_metadata().schema_descr().column(c).sort_order()
+                            == SortOrder::UNSIGNED;
+                        let key = |v: &i64| {
+                            if unsigned {
+                                i128::from(*v as u64)
+                            } else {
+                                i128::from(*v)
+                            }
+                        };
+                        let want = values
+                            .iter()
+                            .min_by_key(|v| key(v))
+                            .zip(values.iter().max_by_key(|v| key(v)));
+                        let got = match chunk.statistics() {
+                            Some(Statistics::Int64(s)) => s.min_opt().zip(s.max_opt()),
+                            other => panic!("{name}: an INT64 column chunk's statistics {other:?}"),
+                        };
+                        assert_eq!(got, want, "{name}: column {c}'s statistics");
+                        continue;
+                    }
                     Ok(ColumnReader::FloatColumnReader(mut reader)) => {
                         read_all(&mut reader, rows, name)
                             .into_iter()

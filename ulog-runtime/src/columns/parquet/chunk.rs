@@ -1,12 +1,19 @@
 //! One column chunk of a row group: a column's values, from every batch of the row group,
-//! encoded by parquet-rs's column writer (PLAIN values, but DELTA_BINARY_PACKED for `INT64`
-//! ones; statistics, the page index) into pages that are compressed here, with one ZSTD
-//! context a thread for every chunk it writes. A `FLOAT` or `DOUBLE` column's pages are
-//! made here instead
-//! ([`write_float_chunk`]): PLAIN values are the values' own bytes, so each page is the
-//! batches' values copied once into a page buffer, its statistics taken from it
-//! ([`super::statistics`]) and compressed from it (parquet-rs's writer copied each value
-//! into a buffer that grows from nothing every page, then that into the page).
+//! into pages compressed here with one ZSTD context a thread for every chunk it writes.
+//!
+//! - `FLOAT` and `DOUBLE` columns ([`write_float_chunk`]): PLAIN values are the values' own
+//!   bytes, so each page is the batches' values copied once into a page buffer, their
+//!   statistics taken in the same pass ([`super::statistics`]), and compressed from it
+//!   (parquet-rs's writer copied each value into a buffer that grows from nothing every
+//!   page, then that into the page).
+//! - `INT64` columns ([`write_int64_chunk`]): each page's values DELTA_BINARY_PACKED
+//!   ([`super::int64`]).
+//! - The others (narrower integers widened to `INT32`, booleans, text), and every column
+//!   when a dictionary is asked for: parquet-rs's column writer (PLAIN values, statistics,
+//!   the page index), its pages handed to [`CompressingPages`].
+//!
+//! Pages made here have the page headers and the chunk metadata parquet-rs's writer gives
+//! the same pages (tested against it).
 //!
 //! parquet-rs's own compression makes a ZSTD compression and a decompression context for
 //! each column chunk. Making one costs more than compressing a small chunk: each runs
