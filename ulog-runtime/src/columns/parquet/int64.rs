@@ -92,7 +92,8 @@ fn zigzag(v: i64) -> u64 {
     ((v << 1) ^ (v >> 63)) as u64
 }
 
-fn uleb(out: &mut Vec<u8>, mut v: u64) {
+/// Appends `v` as ULEB128 (the format's and thrift's varint).
+pub(super) fn uleb(out: &mut Vec<u8>, mut v: u64) {
     loop {
         let byte = (v & 0x7f) as u8;
         v >>= 7;

@@ -394,16 +394,8 @@ pub(super) fn type_defined_float_orders(
         header.push(((columns as u8) << 4) | 0x0c);
     } else {
         header.push(0xfc);
-        let mut v = columns;
-        loop {
-            let byte = (v & 0x7f) as u8;
-            v >>= 7;
-            if v == 0 {
-                header.push(byte);
-                break;
-            }
-            header.push(byte | 0x80);
-        }
+        // The count as a varint (ULEB128).
+        super::int64::uleb(&mut header, columns as u64);
     }
     let list = columns * 3;
     let at = meta
