@@ -319,33 +319,39 @@ pub(super) fn write_int64_chunk<'b, W: Write + Send>(
             Ok(())
         };
         for values in batches {
-            // `uint64_t` values as the same bits: the column's logical type says they are
-            // unsigned.
-            let (signed, unsigned): (&[i64], &[u64]) = match values {
-                ColumnValues::Int64(v) => (v, &[]),
-                ColumnValues::UInt64(v) => (&[], v),
+            match values {
+                ColumnValues::Int64(v) => fill(v, |x| x, &mut page, page_values, &mut flush)?,
+                // The same bits: the column's logical type says they are unsigned.
+                ColumnValues::UInt64(v) => {
+                    fill(v, |x| x as i64, &mut page, page_values, &mut flush)?;
+                }
                 _ => return Err(mismatch(values, Type::INT64)),
-            };
-            let (mut signed, mut unsigned) = (signed, unsigned);
-            while !signed.is_empty() || !unsigned.is_empty() {
-                let room = page_values - page.len();
-                let n = signed.len().max(unsigned.len()).min(room);
-                if signed.is_empty() {
-                    page.extend(unsigned[..n].iter().map(|&x| x as i64));
-                    unsigned = &unsigned[n..];
-                } else {
-                    page.extend_from_slice(&signed[..n]);
-                    signed = &signed[n..];
-                }
-                if page.len() == page_values {
-                    flush(&mut page)?;
-                }
             }
         }
         flush(&mut page)
     })?;
     let (statistics, column_index) = stats.finish(page_index)?;
     chunk.close(row_group, descr, level, statistics, column_index)
+}
+
+/// Copies `values` (as `i64`s) into `page`, handing it to `flush` each time it holds
+/// `page_values` of them.
+fn fill<T: Copy>(
+    mut values: &[T],
+    as_i64: impl Fn(T) -> i64,
+    page: &mut Vec<i64>,
+    page_values: usize,
+    flush: &mut dyn FnMut(&mut Vec<i64>) -> Result<(), ParquetError>,
+) -> Result<(), ParquetError> {
+    while !values.is_empty() {
+        let n = values.len().min(page_values - page.len());
+        page.extend(values[..n].iter().map(|&x| as_i64(x)));
+        values = &values[n..];
+        if page.len() == page_values {
+            flush(page)?;
+        }
+    }
+    Ok(())
 }
 
 fn mismatch(values: &ColumnValues, kind: Type) -> ParquetError {
