@@ -13,7 +13,9 @@
 //!   the page index), its pages handed to [`CompressingPages`].
 //!
 //! Pages made here have the page headers and the chunk metadata parquet-rs's writer gives
-//! the same pages (tested against it).
+//! the same pages (tested against it), but for floats' statistics, which are in the
+//! type-defined order ([`super::statistics`]). They are of required columns only (no
+//! levels), as every column of a conversion is.
 //!
 //! parquet-rs's own compression makes a ZSTD compression and a decompression context for
 //! each column chunk. Making one costs more than compressing a small chunk: each runs
@@ -244,6 +246,7 @@ pub(super) fn write_float_chunk<'b, W: Write + Send>(
     level: i32,
     batches: impl Iterator<Item = &'b ColumnValues>,
 ) -> Result<(), ParquetError> {
+    required(&descr)?;
     let kind = descr.physical_type();
     let width = if kind == Type::DOUBLE { 8 } else { 4 };
     let page_bytes = page_values.max(1) * width;
@@ -299,11 +302,15 @@ pub(super) fn write_int64_chunk<'b, W: Write + Send>(
     level: i32,
     batches: impl Iterator<Item = &'b ColumnValues>,
 ) -> Result<(), ParquetError> {
+    required(&descr)?;
+    let batches: Vec<&ColumnValues> = batches.collect();
+    let rows = batches.iter().map(|b| b.len()).sum::<usize>();
+    // A page's room, no more than the chunk needs (most chunks are a few values).
     let page_values = page_values.max(1);
     let unsigned = descr.sort_order() == SortOrder::UNSIGNED;
     let mut stats = int64::Int64Statistics::new(unsigned);
     let mut chunk = ChunkPages::new(Encoding::DELTA_BINARY_PACKED);
-    let mut page: Vec<i64> = Vec::with_capacity(page_values);
+    let mut page: Vec<i64> = Vec::with_capacity(page_values.min(rows));
     let mut encoded = Vec::new();
     with_zstd(level, |zstd| {
         let mut flush = |page: &mut Vec<i64>| -> Result<(), ParquetError> {
@@ -350,6 +357,17 @@ fn fill<T: Copy>(
         if page.len() == page_values {
             flush(page)?;
         }
+    }
+    Ok(())
+}
+
+/// Refuses a column that has levels: the pages made here have none.
+fn required(descr: &ColumnDescPtr) -> Result<(), ParquetError> {
+    if descr.max_def_level() != 0 || descr.max_rep_level() != 0 {
+        return Err(ParquetError::General(format!(
+            "column {} is not a required one: its pages are not made here",
+            descr.path()
+        )));
     }
     Ok(())
 }
@@ -440,6 +458,13 @@ impl ChunkPages {
         statistics: parquet::file::statistics::Statistics,
         column_index: Option<parquet::file::page_index::column_index::ColumnIndexMetaData>,
     ) -> Result<(), ParquetError> {
+        // Row groups are written with rows only.
+        if self.count == 0 {
+            return Err(ParquetError::General(format!(
+                "column {}: a column chunk of no values",
+                descr.path()
+            )));
+        }
         let bytes = |n: u64| i64::try_from(n).map_err(|_| too_many("bytes"));
         let metadata = ColumnChunkMetaData::builder(descr)
             .set_compression(Compression::ZSTD(ZstdLevel::try_new(level)?))
@@ -447,15 +472,11 @@ impl ChunkPages {
             .set_encodings_mask(EncodingMask::new_from_encodings(
                 [self.encoding, Encoding::RLE].iter(),
             ))
-            .set_page_encoding_stats(if self.count == 0 {
-                Vec::new()
-            } else {
-                vec![PageEncodingStats {
-                    page_type: PageType::DATA_PAGE,
-                    encoding: self.encoding,
-                    count: i32::try_from(self.count).map_err(|_| too_many("pages"))?,
-                }]
-            })
+            .set_page_encoding_stats(vec![PageEncodingStats {
+                page_type: PageType::DATA_PAGE,
+                encoding: self.encoding,
+                count: i32::try_from(self.count).map_err(|_| too_many("pages"))?,
+            }])
             .set_total_compressed_size(bytes(self.compressed)?)
             .set_total_uncompressed_size(bytes(self.uncompressed)?)
             .set_num_values(i64::try_from(self.values).map_err(|_| too_many("values"))?)

@@ -339,9 +339,10 @@ impl Converter {
 enum HashBy {
     /// By the reading thread, as it reads (no encoder thread).
     Reader,
-    /// By the encoder's threads, from copies of what was read ([`Encoder::hash`]): with
-    /// one encoder thread (two cores), the reading thread sets the pace, and hashing took
-    /// it two fifths of its time.
+    /// By the encoder's threads, from copies of what was read ([`Encoder::hash`]): for a
+    /// file with one encoder thread (two cores), where the reading thread sets the pace
+    /// and hashing took it two fifths of its time, and for any other input with encoder
+    /// threads (nothing to read again).
     Encoder,
     /// On a thread of its own, reading the file again ([`Source::hash_file`]).
     Elsewhere,

@@ -95,7 +95,8 @@ struct Shared<W: Output> {
     room: Condvar,
     /// Bytes of rows (once columns) all tables may hold before one is written.
     budget: usize,
-    /// Bytes of row batches waiting for a worker before the reader waits.
+    /// Bytes of row batches and of the file to hash waiting for a worker before the reader
+    /// waits.
     in_flight_limit: usize,
 }
 
@@ -284,11 +285,13 @@ impl<W: Output> Encoder<W> {
     /// The hash of every byte given to [`Encoder::hash`], once the workers have stopped.
     pub(super) fn take_hash(&self) -> sha2::Sha256 {
         let mut st = self.lock();
-        debug_assert!(st.hash.queue.is_empty(), "every byte hashed");
+        // An invariant, not an input's fault: a wrong digest would name another log.
+        assert!(st.hash.queue.is_empty(), "every byte given is hashed");
         st.hash.sha.take().expect("no worker holds the hash")
     }
 
-    /// A worker: encodes ready tables until [`Encoder::finish`] and no batch is left. The
+    /// A worker: encodes ready tables and hashes the file's bytes given until
+    /// [`Encoder::finish`] and no batch or byte is left. The
     /// reading thread may call it too once it has given every batch, to help.
     pub(super) fn work(&self) {
         let mut st = self.lock();

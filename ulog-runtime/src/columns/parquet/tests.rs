@@ -378,7 +378,8 @@ fn a_file_converts_as_its_bytes_read_as_a_stream() {
         .map(|b| format!("{b:02x}"))
         .collect();
     assert_eq!(json(&stream)["log"]["sha256"], sha.as_str());
-    // Hashed as read (one encoder or none) or on a thread of its own (two).
+    // Hashed as read (no encoder), by the encoder's thread (one) or on a thread of its own
+    // (two).
     for encoders in [Some(0), Some(1), Some(2)] {
         let progress = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(0));
         let seen = progress.clone();
@@ -1764,4 +1765,55 @@ fn sixty_four_bit_integers_of_any_bits_come_back_delta_encoded() {
     }
     assert_eq!(start, rows as usize);
     std::fs::remove_dir_all(&root).unwrap();
+}
+
+/// DELTA_BINARY_PACKED pages of every length that ends a block or a miniblock somewhere
+/// (one value: a header only; two; a miniblock and one; a block and one or two; miniblocks
+/// left unused in the last block) read back as written through parquet-rs's reader, with
+/// deltas of every width (none, 1 bit, 64 bits).
+#[test]
+fn delta_pages_of_any_length_read_back() {
+    use parquet::basic::Encoding;
+    use parquet::schema::parser::parse_message_type;
+
+    let schema =
+        std::sync::Arc::new(parse_message_type("message m { required int64 v; }").unwrap());
+    for len in [
+        1usize, 2, 3, 32, 33, 64, 65, 127, 128, 129, 130, 161, 257, 1000,
+    ] {
+        for pattern in 0..3 {
+            let values: Vec<i64> = (0..len as i64)
+                .map(|i| match pattern {
+                    0 => 7,
+                    1 => i + (i % 2),
+                    _ => {
+                        if i % 2 == 0 {
+                            i64::MIN + i
+                        } else {
+                            i64::MAX - i
+                        }
+                    }
+                })
+                .collect();
+            let batches = [crate::columns::ColumnValues::Int64(values.clone())];
+            let props = thousand_value_pages(Some(Encoding::DELTA_BINARY_PACKED));
+            let bytes = written_here(&schema, props, 1, |_, rg, descr| {
+                chunk::write_int64_chunk(rg, descr, len, true, 1, batches.iter()).unwrap();
+            });
+            let read: Vec<i64> =
+                ParquetRecordBatchReaderBuilder::try_new(bytes::Bytes::from(bytes))
+                    .unwrap()
+                    .build()
+                    .unwrap()
+                    .flat_map(|b| {
+                        arrow_array::cast::AsArray::as_primitive::<arrow_array::types::Int64Type>(
+                            b.unwrap().column(0),
+                        )
+                        .values()
+                        .to_vec()
+                    })
+                    .collect();
+            assert_eq!(read, values, "{len} values, pattern {pattern}");
+        }
+    }
 }
