@@ -228,6 +228,16 @@ fn a_small_budget_writes_more_row_groups_of_the_same_rows() {
             },
             [40, 20],
         ),
+        (
+            // Every column through parquet-rs's writer, with dictionaries (INT64 ones
+            // falling back to DELTA_BINARY_PACKED).
+            "dictionary",
+            ParquetOptions {
+                dictionary: true,
+                ..ParquetOptions::default()
+            },
+            [1, 1],
+        ),
     ] {
         let root = temp(name);
         let conv = Converter::new(&root, options)
@@ -239,6 +249,13 @@ fn a_small_budget_writes_more_row_groups_of_the_same_rows() {
             let (ev, ec) = expected(m as u64);
             assert_eq!(file, format!("f/battery_{m}.parquet"));
             assert!(v == ev && c == ec, "{name}: {file} holds other values");
+            let (batches, ..) = read(&root.join(&file));
+            let timestamps: Vec<u64> = column::<UInt64Array>(&batches, "timestamp")
+                .iter()
+                .flat_map(|a| a.values().iter().copied())
+                .collect();
+            let want: Vec<u64> = (0..rows).filter(|t| m == 0 || t % 2 == 0).collect();
+            assert!(timestamps == want, "{name}: {file} holds other timestamps");
             match groups[m] {
                 0 => assert!(g > 5, "{name}: {file}: {g} row groups"),
                 n => assert_eq!(g, n, "{name}: {file}"),
