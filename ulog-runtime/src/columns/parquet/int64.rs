@@ -8,7 +8,7 @@
 //! parquet-rs's own DELTA_BINARY_PACKED encoder packs each value through a general bit
 //! writer; this one packs a miniblock's 32 values through a 128-bit accumulator.
 
-use parquet::basic::{BoundaryOrder, Type};
+use parquet::basic::Type;
 use parquet::errors::ParquetError;
 use parquet::file::metadata::ColumnIndexBuilder;
 use parquet::file::page_index::column_index::ColumnIndexMetaData;
@@ -176,12 +176,7 @@ impl Int64Statistics {
             return Ok((statistics, None));
         }
         let mut builder = ColumnIndexBuilder::new(Type::INT64);
-        let (mut ascending, mut descending) = (true, true);
-        for (i, &(lo, hi)) in self.pages.iter().enumerate() {
-            if let Some(&(last_lo, last_hi)) = i.checked_sub(1).map(|j| &self.pages[j]) {
-                ascending &= !(self.greater(last_lo, lo) || self.greater(last_hi, hi));
-                descending &= !(self.greater(lo, last_lo) || self.greater(hi, last_hi));
-            }
+        for &(lo, hi) in &self.pages {
             builder.append(
                 false,
                 lo.to_le_bytes().to_vec(),
@@ -190,11 +185,10 @@ impl Int64Statistics {
                 None,
             );
         }
-        builder.set_boundary_order(match (ascending, descending) {
-            (true, _) => BoundaryOrder::ASCENDING,
-            (false, true) => BoundaryOrder::DESCENDING,
-            (false, false) => BoundaryOrder::UNORDERED,
-        });
+        builder.set_boundary_order(super::statistics::boundary_order(
+            self.pages.iter().copied(),
+            |a, b| self.greater(a, b),
+        ));
         Ok((statistics, Some(builder.build()?)))
     }
 }

@@ -332,12 +332,7 @@ impl FloatStatistics {
             return Ok((statistics, None));
         };
         let mut builder = ColumnIndexBuilder::new(self.kind);
-        let (mut ascending, mut descending) = (true, true);
-        for (i, &(lo, hi, nans)) in pages.iter().enumerate() {
-            if let Some(&(last_lo, last_hi, _)) = i.checked_sub(1).map(|j| &pages[j]) {
-                ascending &= !(last_lo > lo || last_hi > hi);
-                descending &= !(lo > last_lo || hi > last_hi);
-            }
+        for &(lo, hi, nans) in &pages {
             let bytes = |v: f64| {
                 if self.kind == Type::DOUBLE {
                     v.to_le_bytes().to_vec()
@@ -350,12 +345,34 @@ impl FloatStatistics {
             })?;
             builder.append(false, bytes(lo), bytes(hi), 0, Some(nans));
         }
-        builder.set_boundary_order(match (ascending, descending) {
-            (true, _) => BoundaryOrder::ASCENDING,
-            (false, true) => BoundaryOrder::DESCENDING,
-            (false, false) => BoundaryOrder::UNORDERED,
-        });
+        builder.set_boundary_order(boundary_order(
+            pages.iter().map(|&(lo, hi, _)| (lo, hi)),
+            |a, b| a > b,
+        ));
         Ok((statistics, Some(builder.build()?)))
+    }
+}
+
+/// The order of a chunk's pages by their bounds (`greater`: the column's order), as
+/// parquet-rs's writer tells it: ascending if no page's minimum or maximum is below the
+/// page before's (every page alike too), else descending if none is above, else unordered.
+pub(super) fn boundary_order<T: Copy>(
+    pages: impl Iterator<Item = (T, T)>,
+    greater: impl Fn(T, T) -> bool,
+) -> BoundaryOrder {
+    let (mut ascending, mut descending) = (true, true);
+    let mut last: Option<(T, T)> = None;
+    for (lo, hi) in pages {
+        if let Some((last_lo, last_hi)) = last {
+            ascending &= !(greater(last_lo, lo) || greater(last_hi, hi));
+            descending &= !(greater(lo, last_lo) || greater(hi, last_hi));
+        }
+        last = Some((lo, hi));
+    }
+    match (ascending, descending) {
+        (true, _) => BoundaryOrder::ASCENDING,
+        (false, true) => BoundaryOrder::DESCENDING,
+        (false, false) => BoundaryOrder::UNORDERED,
     }
 }
 
