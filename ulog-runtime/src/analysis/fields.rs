@@ -471,11 +471,7 @@ fn reduce_floats(bytes: &[u8], stride: usize, at: usize, stats: &mut [Stat]) -> 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "sse2")]
 fn reduce_floats_sse2(bytes: &[u8], stride: usize, at: usize, stats: &mut [Stat]) -> bool {
-    use std::arch::x86_64::{
-        __m128, __m128d, _mm_add_pd, _mm_cvtps_pd, _mm_cvtsd_f64, _mm_cvtss_f32, _mm_max_ps,
-        _mm_min_ps, _mm_movehl_ps, _mm_set_ps, _mm_set1_ps, _mm_setzero_pd, _mm_shuffle_ps,
-        _mm_unpackhi_pd,
-    };
+    use std::arch::x86_64::{__m128, _mm_set_ps};
     assert!(at + 16 <= stride && (1..=4).contains(&stats.len()));
     // The four floats of a row (bounds checked once, by the block).
     let four = |row: &[u8]| -> __m128 {
@@ -483,57 +479,28 @@ fn reduce_floats_sse2(bytes: &[u8], stride: usize, at: usize, stats: &mut [Stat]
         let f = |k: usize| f32::from_le_bytes([b[4 * k], b[4 * k + 1], b[4 * k + 2], b[4 * k + 3]]);
         _mm_set_ps(f(3), f(2), f(1), f(0))
     };
-    // Two rows at a time into two sets of accumulators: each addition waits on the last of
-    // its own set only. Minimum and maximum are the instructions' (a NaN would be kept or
-    // not; the finite sum rules NaNs out).
-    let (mut lo, mut hi) = (
-        [_mm_set1_ps(f32::INFINITY); 2],
-        [_mm_set1_ps(f32::NEG_INFINITY); 2],
-    );
-    let mut sums: [[__m128d; 2]; 2] = [[_mm_setzero_pd(); 2]; 2];
-    let mut take = |k: usize, v: __m128| {
-        lo[k] = _mm_min_ps(v, lo[k]);
-        hi[k] = _mm_max_ps(v, hi[k]);
-        sums[k][0] = _mm_add_pd(sums[k][0], _mm_cvtps_pd(v));
-        sums[k][1] = _mm_add_pd(sums[k][1], _mm_cvtps_pd(_mm_movehl_ps(v, v)));
-    };
+    // Two rows at a time, one into each set of accumulators.
+    let mut quads = Quads::new();
     let fields = &bytes[at..];
     let pairs = fields.chunks_exact(2 * stride);
     let rest = pairs.remainder();
     let mut n = 0u64;
     for pair in pairs {
         let (a, b) = pair.split_at(stride);
-        take(0, four(a));
-        take(1, four(b));
+        quads.take(0, four(a));
+        quads.take(1, four(b));
         n += 2;
     }
     // The rows after the pairs: one or two (the slice starts `at` bytes into the first
     // row, so its last pair may be cut short), each chunk a row's fields.
     for row in rest.chunks(stride) {
-        take(0, four(row));
+        quads.take(0, four(row));
         n += 1;
     }
-    let lanes = |v: __m128| -> [f32; 4] {
-        [
-            _mm_cvtss_f32(v),
-            _mm_cvtss_f32(_mm_shuffle_ps::<0b01_01_01_01>(v, v)),
-            _mm_cvtss_f32(_mm_shuffle_ps::<0b10_10_10_10>(v, v)),
-            _mm_cvtss_f32(_mm_shuffle_ps::<0b11_11_11_11>(v, v)),
-        ]
-    };
-    let halves = |s: __m128d| [_mm_cvtsd_f64(s), _mm_cvtsd_f64(_mm_unpackhi_pd(s, s))];
-    // Each lane's sum, the two sets of accumulators added.
-    let total: [f64; 4] = std::array::from_fn(|k| {
-        let (a, b) = (halves(sums[0][k / 2]), halves(sums[1][k / 2]));
-        a[k % 2] + b[k % 2]
-    });
+    let (lo, hi, total) = quads.finish();
     if !total[..stats.len()].iter().sum::<f64>().is_finite() {
         return false;
     }
-    let (lo, hi) = (
-        lanes(_mm_min_ps(lo[0], lo[1])),
-        lanes(_mm_max_ps(hi[0], hi[1])),
-    );
     for (k, stat) in stats.iter_mut().enumerate() {
         if let Stat::Float {
             min,
@@ -549,6 +516,68 @@ fn reduce_floats_sse2(bytes: &[u8], stride: usize, at: usize, stats: &mut [Stat]
         }
     }
     true
+}
+
+/// Four lanes of `f32`s folded in SSE2 registers: each lane's bounds (the instructions'
+/// minimum and maximum: a NaN would be kept or not, which the callers' finite sums rule
+/// out) and sum (in `f64`), in two sets of accumulators that the caller gives values to in
+/// turn, so that each addition waits on the last of its own set only.
+#[cfg(target_arch = "x86_64")]
+struct Quads {
+    lo: [std::arch::x86_64::__m128; 2],
+    hi: [std::arch::x86_64::__m128; 2],
+    sums: [[std::arch::x86_64::__m128d; 2]; 2],
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Quads {
+    #[target_feature(enable = "sse2")]
+    fn new() -> Quads {
+        use std::arch::x86_64::{_mm_set1_ps, _mm_setzero_pd};
+        Quads {
+            lo: [_mm_set1_ps(f32::INFINITY); 2],
+            hi: [_mm_set1_ps(f32::NEG_INFINITY); 2],
+            sums: [[_mm_setzero_pd(); 2]; 2],
+        }
+    }
+
+    /// Takes four values, one a lane, into set `k` (0 or 1).
+    #[target_feature(enable = "sse2")]
+    #[inline]
+    fn take(&mut self, k: usize, v: std::arch::x86_64::__m128) {
+        use std::arch::x86_64::{_mm_add_pd, _mm_cvtps_pd, _mm_max_ps, _mm_min_ps, _mm_movehl_ps};
+        self.lo[k] = _mm_min_ps(v, self.lo[k]);
+        self.hi[k] = _mm_max_ps(v, self.hi[k]);
+        self.sums[k][0] = _mm_add_pd(self.sums[k][0], _mm_cvtps_pd(v));
+        self.sums[k][1] = _mm_add_pd(self.sums[k][1], _mm_cvtps_pd(_mm_movehl_ps(v, v)));
+    }
+
+    /// Each lane's least and greatest value and sum, the two sets together.
+    #[target_feature(enable = "sse2")]
+    fn finish(self) -> ([f32; 4], [f32; 4], [f64; 4]) {
+        use std::arch::x86_64::{
+            __m128, __m128d, _mm_cvtsd_f64, _mm_cvtss_f32, _mm_max_ps, _mm_min_ps, _mm_shuffle_ps,
+            _mm_unpackhi_pd,
+        };
+        let lanes = |v: __m128| -> [f32; 4] {
+            [
+                _mm_cvtss_f32(v),
+                _mm_cvtss_f32(_mm_shuffle_ps::<0b01_01_01_01>(v, v)),
+                _mm_cvtss_f32(_mm_shuffle_ps::<0b10_10_10_10>(v, v)),
+                _mm_cvtss_f32(_mm_shuffle_ps::<0b11_11_11_11>(v, v)),
+            ]
+        };
+        let halves = |s: __m128d| [_mm_cvtsd_f64(s), _mm_cvtsd_f64(_mm_unpackhi_pd(s, s))];
+        let total: [f64; 4] = std::array::from_fn(|k| {
+            let (a, b) = (halves(self.sums[0][k / 2]), halves(self.sums[1][k / 2]));
+            a[k % 2] + b[k % 2]
+        });
+        (
+            lanes(_mm_min_ps(self.lo[0], self.lo[1])),
+            lanes(_mm_max_ps(self.hi[0], self.hi[1])),
+            total,
+        )
+    }
 }
 
 /// Elsewhere no step uses it ([`plan`]).
@@ -649,16 +678,12 @@ fn reduce_f32_column(values: &[f32], stat: &mut Stat) -> bool {
     }
 }
 
-/// [`reduce_f32_column`] in SSE2 instructions: 8 values a step, in two vectors of each
-/// bound and four of sums (in `f64`, each waiting on the one step before only), which with
-/// the values in flight fit the 16 registers.
+/// [`reduce_f32_column`] in SSE2 instructions: 8 values a step, the first four into one set
+/// of [`Quads`] and the next four into the other.
 #[cfg(all(feature = "parquet", target_arch = "x86_64"))]
 #[target_feature(enable = "sse2")]
 fn reduce_f32_column_sse2(values: &[f32], stat: &mut Stat) -> bool {
-    use std::arch::x86_64::{
-        __m128, __m128d, _mm_add_pd, _mm_cvtps_pd, _mm_cvtsd_f64, _mm_max_ps, _mm_min_ps,
-        _mm_movehl_ps, _mm_set_ps, _mm_set1_ps, _mm_setzero_pd, _mm_unpackhi_pd,
-    };
+    use std::arch::x86_64::_mm_set_ps;
     let Stat::Float {
         min,
         max,
@@ -669,41 +694,16 @@ fn reduce_f32_column_sse2(values: &[f32], stat: &mut Stat) -> bool {
         return false;
     };
     let (blocks, rest) = values.as_chunks::<8>();
-    let mut lo = [_mm_set1_ps(f32::INFINITY); 2];
-    let mut hi = [_mm_set1_ps(f32::NEG_INFINITY); 2];
-    let mut sums: [__m128d; 4] = [_mm_setzero_pd(); 4];
+    let mut quads = Quads::new();
     for block in blocks {
-        for (j, q) in block.as_chunks::<4>().0.iter().enumerate() {
-            let v: __m128 = _mm_set_ps(q[3], q[2], q[1], q[0]);
-            // The instructions' minimum and maximum (a NaN would be kept or not; the
-            // finite sum rules NaNs out).
-            lo[j] = _mm_min_ps(v, lo[j]);
-            hi[j] = _mm_max_ps(v, hi[j]);
-            sums[2 * j] = _mm_add_pd(sums[2 * j], _mm_cvtps_pd(v));
-            sums[2 * j + 1] = _mm_add_pd(sums[2 * j + 1], _mm_cvtps_pd(_mm_movehl_ps(v, v)));
+        for (k, q) in block.as_chunks::<4>().0.iter().enumerate() {
+            quads.take(k, _mm_set_ps(q[3], q[2], q[1], q[0]));
         }
     }
-    let lanes = |v: __m128| -> [f32; 4] {
-        let mut out = [0.0f32; 4];
-        let halves = [_mm_cvtps_pd(v), _mm_cvtps_pd(_mm_movehl_ps(v, v))];
-        for (k, h) in halves.into_iter().enumerate() {
-            // Exact: each `f64` holds an `f32`.
-            out[2 * k] = _mm_cvtsd_f64(h) as f32;
-            out[2 * k + 1] = _mm_cvtsd_f64(_mm_unpackhi_pd(h, h)) as f32;
-        }
-        out
-    };
-    let mut total = 0.0f64;
-    for s in sums {
-        total += _mm_cvtsd_f64(s) + _mm_cvtsd_f64(_mm_unpackhi_pd(s, s));
-    }
-    let (mut least, mut most) = (f32::INFINITY, f32::NEG_INFINITY);
-    for j in 0..2 {
-        for (l, h) in lanes(lo[j]).into_iter().zip(lanes(hi[j])) {
-            least = least.min(l);
-            most = most.max(h);
-        }
-    }
+    let (lo, hi, totals) = quads.finish();
+    let mut total: f64 = totals.iter().sum();
+    let mut least = lo.into_iter().fold(f32::INFINITY, f32::min);
+    let mut most = hi.into_iter().fold(f32::NEG_INFINITY, f32::max);
     for &v in rest {
         least = least.min(v);
         most = most.max(v);
