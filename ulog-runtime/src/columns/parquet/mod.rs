@@ -68,11 +68,11 @@ pub struct ParquetOptions {
     /// got: the same log and options give the same files, byte for byte, on any number of
     /// threads. A conversion's memory is this, plus while a row group is encoded one
     /// column chunk's encoded pages at a time (row groups are encoded a column at a time)
-    /// and a ZSTD context and a 1 MiB page buffer per thread that encodes, plus per table the batch being filled
-    /// ([`ParquetOptions::batch_bytes`]) and the footer metadata of its row groups so far,
-    /// plus what the log says besides its rows (formats, parameters, logged messages,
-    /// parameter changes, dropouts: kept for `metadata.json`), plus the flight analysis's
-    /// state when it is on. On the 400 MB benchmark log (70 tables) the whole process
+    /// and a ZSTD context and a 1 MiB page buffer per thread that encodes, plus per table
+    /// the batch being filled ([`ParquetOptions::batch_bytes`]) and the footer metadata of
+    /// its row groups so far, plus what the log says besides its rows (formats, parameters,
+    /// logged messages, parameter changes, dropouts: kept for `metadata.json`), plus the
+    /// flight analysis's state when it is on. On the 400 MB benchmark log (70 tables) the whole process
     /// peaks at about 54 MiB with the default 16 MiB (on two cores, about 6 MiB of it
     /// copies of the file waiting to be hashed).
     pub buffer_bytes: usize,
