@@ -33,7 +33,8 @@ pub(crate) struct Args {
     /// DIR/topic=<topic>/log=<stem>/multi_id=<m>/data.parquet.
     #[arg(long, value_enum, default_value = "per-log")]
     layout: LayoutArg,
-    /// Logs converted at once (default: one per core).
+    /// Threads: logs converted at once, and a single log encodes on the N-1 others
+    /// (default: one per core).
     #[arg(short, long, value_parser = at_least_one)]
     jobs: Option<usize>,
     /// ZSTD compression level.

@@ -24,9 +24,11 @@
 //! The Arrow schema stored with the file also carries each column's ULog type
 //! (`ulog.type`).
 //!
-//! Column chunks are ZSTD-compressed pages of at most 1 MiB of values: PLAIN values, but
-//! DELTA_BINARY_PACKED for `INT64` columns (timestamps and other 64-bit integers, whose
-//! deltas are small); every reader of Parquet reads both (pyarrow, DuckDB, Polars, Spark).
+//! Column chunks are ZSTD-compressed pages of at most 1 MiB of values (those of narrower
+//! integers, booleans and text may pass it by a few KiB: parquet-rs's writer checks the
+//! limit after each batch): PLAIN values, but DELTA_BINARY_PACKED for `INT64` columns
+//! (timestamps and other 64-bit integers, whose deltas are small); every reader of Parquet
+//! reads both (pyarrow, DuckDB, Polars, Spark). Padding fields are left out.
 
 mod chunk;
 mod convert;
