@@ -249,13 +249,15 @@ pub fn read(data: &[u8], options: &PyulogOptions) -> Result<PyulogFile, PyulogEr
 /// [`read`] of a memory-mapped file, its pages given back to the kernel behind the reading
 /// (so that the process holds the rows, not the file and the rows). The map is from then on
 /// mapped in small pages, never 2 MiB blocks (`MADV_NOHUGEPAGE`), so that little of the file
-/// is resident ahead of the reading.
+/// is resident ahead of the reading; while it is read, the kernel is told that the reading
+/// touches each page once (`MADV_SEQUENTIAL`).
 #[cfg(feature = "mmap")]
 pub fn read_mapped(
     file: &crate::read::MappedFile,
     options: &PyulogOptions,
 ) -> Result<PyulogFile, PyulogError> {
     file.map_small_pages();
+    let _once = file.walk_once();
     let release = |from: u64, to: u64| file.release(from, to);
     read_releasing(file, options, Some(&release))
 }
