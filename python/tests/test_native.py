@@ -291,8 +291,14 @@ def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
     with pytest.warns(UserWarning) as said:
         early = ulog.to_parquet(str(good), tmp_path / "early", topics="battery_status", end=1.0)
     assert early[0]["ok"] and early[0]["files"] == []
+    # The message gives the span of the topic's rows (every instance's, read by pyulog), as
+    # Rust prints a float (no `.0` on a whole number).
+    stamps = [d.data["timestamp"] for d in pyulog.ULog(str(good), ["battery_status"]).data_list]
+    first, last = (float(min(t.min() for t in stamps)) / 1e6, float(max(t.max() for t in stamps)) / 1e6)
+    shown = lambda x: repr(x)[:-2] if repr(x).endswith(".0") else repr(x)
     assert [str(w.message) for w in said] == [
-        f"{good}: no Parquet file written: the topics asked for have no rows that can be read in the window before 1 s",
+        f"{good}: no Parquet file written: the topics asked for have no rows that can be read in the window before 1 s"
+        f" (their rows run from {shown(first)} s to {shown(last)} s)",
         "no log has rows of topic `battery_status` in the window before 1 s",
     ]
     meta = json.loads(open(early[0]["metadata"]).read())

@@ -214,13 +214,7 @@ pub(crate) fn report_empty_window(
     window: &crate::columns::Window,
     span_us: Option<(u64, u64)>,
 ) {
-    let span = span_us.map_or(String::new(), |(a, b)| {
-        format!(
-            " (their rows run from {} s to {} s)",
-            a as f64 / 1e6,
-            b as f64 / 1e6
-        )
-    });
+    let span = span_us.map_or(String::new(), |(a, b)| crate::columns::span_in_words(a, b));
     eprintln!(
         "ulog: {}: no row of the topics asked for lies in the window {window}{span}",
         file.display()

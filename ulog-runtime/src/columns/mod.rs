@@ -869,6 +869,16 @@ pub enum WindowError {
     },
 }
 
+/// ` (their rows run from 0 s to 1194.367328 s)`: what a message about a window no row lay in
+/// adds, so that the user sees which window would have rows (timestamps in µs).
+pub(crate) fn span_in_words(first_us: u64, last_us: u64) -> String {
+    format!(
+        " (their rows run from {} s to {} s)",
+        first_us as f64 / 1e6,
+        last_us as f64 / 1e6
+    )
+}
+
 impl Window {
     /// A window from `start` to `end` seconds of log time (µs timestamps / 1e6), either
     /// bound absent for none; an error for a bound that is NaN, infinite or beyond what a

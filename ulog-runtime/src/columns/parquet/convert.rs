@@ -109,18 +109,26 @@ pub struct Conversion {
     /// Things a user should hear about: names that had to change to stay unique (a topic's
     /// file, the log's folder).
     pub notes: Vec<String>,
+    /// The first and the last timestamp (µs) of the rows of the topics converted (all
+    /// topics, or those asked for), in the window or not; `None` when they have no row.
+    pub row_span_us: Option<(u64, u64)>,
 }
 
 impl Conversion {
     /// What `ulog parquet` says of this log on stderr, a line each: its notes, what reading
     /// left out ([`Skipped::lines`] of `topics`), and when no file was written, that no
     /// topic (of `topics`) has rows (in `window`, the conversion's:
-    /// [`Window::nothing_written`](crate::columns::Window::nothing_written)).
+    /// [`Window::nothing_written`](crate::columns::Window::nothing_written)), with the time
+    /// span of their rows when a window left them all out.
     pub fn lines(&self, topics: &[String], window: &crate::columns::Window) -> Vec<String> {
         let mut out = self.notes.clone();
         out.extend(self.skipped.lines(topics));
         if self.files.is_empty() {
-            out.push(window.nothing_written("Parquet file", topics));
+            let mut line = window.nothing_written("Parquet file", topics);
+            if let Some((first, last)) = self.row_span_us.filter(|_| window.is_bounded()) {
+                line.push_str(&crate::columns::span_in_words(first, last));
+            }
+            out.push(line);
         }
         out
     }
@@ -880,6 +888,13 @@ impl<'c> Pass<'c> {
                 row_groups,
             });
         }
+        let options = &self.converter.options;
+        let row_span_us = self
+            .summaries
+            .iter()
+            .filter(|s| options.wants(&s.topic.name))
+            .filter_map(|s| Some((s.topic.first_timestamp?, s.topic.last_timestamp?)))
+            .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)));
         let mut topics: Vec<TopicSummary> = self.summaries.into_iter().map(|s| s.topic).collect();
         topics.sort_by(|a, b| (&a.name, a.multi_id).cmp(&(&b.name, b.multi_id)));
         let facts = LogFacts::new(
@@ -948,6 +963,7 @@ impl<'c> Pass<'c> {
             metadata,
             skipped: std::mem::take(&mut self.skipped),
             notes: std::mem::take(&mut self.notes),
+            row_span_us,
         })
     }
 }

@@ -60,8 +60,9 @@ use crate::read::{Log, Metadata};
 #[derive(Debug, Clone, PartialEq)]
 pub struct ParquetOptions {
     /// ZSTD level (1, the parquet-rs default, to 22; negative levels are faster still).
+    /// Default 1.
     pub zstd_level: i32,
-    /// Most rows in one row group.
+    /// Most rows in one row group. Default 1,048,576 (2^20).
     pub row_group_rows: usize,
     /// Memory for the rows waiting for their row group, all tables of one log together
     /// (the bytes the rows take once columns): when they pass it, the table holding most
@@ -76,26 +77,27 @@ pub struct ParquetOptions {
     /// logged messages, parameter changes, dropouts: kept for `metadata.json`), plus the
     /// flight analysis's state when it is on. On the 400 MB benchmark log (70 tables) the whole process
     /// peaks at about 54 MiB with the default 16 MiB (on two cores, about 6 MiB of it
-    /// copies of the file waiting to be hashed).
+    /// copies of the file waiting to be hashed). Default 16 MiB.
     pub buffer_bytes: usize,
     /// Row data collected per topic instance before it is made an Arrow record batch (at
-    /// least one row).
+    /// least one row). Default 64 KiB.
     pub batch_bytes: usize,
     /// Dictionary encoding (off: flight data rarely repeats enough to gain from it, and
     /// dictionaries hold memory). With it on, parquet-rs holds a column chunk's
     /// dictionary-encoded pages until the chunk closes, before their compression: a chunk's
     /// encoded size on top of the memory [`ParquetOptions::buffer_bytes`] describes.
+    /// Default off.
     pub dictionary: bool,
-    /// Min/max statistics per page (the column index) as well as per row group.
+    /// Min/max statistics per page (the column index) as well as per row group. Default on.
     pub page_statistics: bool,
-    /// Only these topics (all if empty).
+    /// Only these topics (all if empty, the default).
     pub topics: Vec<String>,
-    /// Only the rows of this window.
+    /// Only the rows of this window. Default: the whole log.
     pub window: Window,
-    /// Where the files of a conversion go.
+    /// Where the files of a conversion go. Default [`Layout::PerLog`].
     pub layout: Layout,
     /// The flight analysis ([`crate::analysis`]) in `metadata.json` (under `analysis`), as
-    /// PX4's Flight Review converter writes its own.
+    /// PX4's Flight Review converter writes its own. Default on.
     pub analysis: bool,
     /// Threads encoding one log's row groups beside the thread that reads it (0: none, the
     /// reading thread encodes). [`Converter::convert_file`] with the default (`None`)
