@@ -295,7 +295,10 @@ def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
     # Rust prints a float (no `.0` on a whole number).
     stamps = [d.data["timestamp"] for d in pyulog.ULog(str(good), ["battery_status"]).data_list]
     first, last = (float(min(t.min() for t in stamps)) / 1e6, float(max(t.max() for t in stamps)) / 1e6)
-    shown = lambda x: repr(x)[:-2] if repr(x).endswith(".0") else repr(x)
+
+    def shown(x):
+        return np.format_float_positional(x, trim="-")
+
     assert [str(w.message) for w in said] == [
         f"{good}: no Parquet file written: the topics asked for have no rows that can be read in the window before 1 s"
         f" (their rows run from {shown(first)} s to {shown(last)} s)",

@@ -129,7 +129,10 @@ impl Cache {
         }
     }
 
-    /// Drops the log's cached pages and reads it back as `self` says.
+    /// Drops the log's cached pages and reads it back as `self` says. (A log on tmpfs, or
+    /// mapped by another process meanwhile, keeps its pages: the runs then start from the
+    /// cache as it was.)
+    #[cfg(target_os = "linux")]
     fn prepare(self, log: &str) -> Result<(), String> {
         use std::io::Read;
         use std::os::fd::AsRawFd;
@@ -167,6 +170,17 @@ impl Cache {
             Cache::Keep => {}
         }
         Ok(())
+    }
+
+    /// Elsewhere only the cache as found can be measured.
+    #[cfg(not(target_os = "linux"))]
+    fn prepare(self, _log: &str) -> Result<(), String> {
+        match self {
+            Cache::Keep => Ok(()),
+            _ => Err(
+                "--cache read and pages need Linux (posix_fadvise): use --cache keep".to_owned(),
+            ),
+        }
     }
 }
 

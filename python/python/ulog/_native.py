@@ -258,10 +258,11 @@ class Log:
 
 
 def _seconds(us: int) -> str:
-    """Microseconds as seconds, in the shortest digits that give them back (as the ``ulog``
-    command prints times: ``20.33``, ``5``)."""
-    text = repr(us / 1e6)
-    return text[:-2] if text.endswith(".0") else text
+    """Microseconds as seconds, in the shortest digits that give them back and never with an
+    exponent (as the ``ulog`` command prints times: ``20.33``, ``5``, ``0.00005``)."""
+    import numpy
+
+    return numpy.format_float_positional(us / 1e6, trim="-")
 
 
 def _count(name: str, value: Any) -> int:

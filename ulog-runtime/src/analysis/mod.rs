@@ -399,8 +399,9 @@ struct Route {
     fields: Option<usize>,
 }
 
-/// Which consumers an analyzer runs: a pass over a whole-file log is split across threads,
-/// each running some, their analyses merged ([`Analysis::of_log`]).
+/// Which consumers an analyzer runs: all but the per-field statistics where those are taken
+/// elsewhere (on another thread in [`Analysis::of_bytes`], from the columns in a conversion
+/// to Parquet) and merged into its analysis.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 struct Parts {
     /// Modes, sensors, diagnostics, parameters.
@@ -709,8 +710,9 @@ impl Analysis {
     }
 }
 
-/// A walk's rows to an analyzer; the parts of the per-field statistics may be walked on
-/// several threads (the other consumers need the rows in file order: one thread).
+/// A walk's rows to an analyzer, on one thread (its consumers need the rows in file order).
+/// Only an analyzer of the per-field statistics alone could be walked in parts on several
+/// threads (`fork`, `append`); [`Analysis::of_bytes`] walks `fields::FieldStats` itself.
 impl RowVisitor for Analyzer {
     #[inline]
     fn row(&mut self, meta: &Metadata, row: &Row<'_>) {

@@ -871,6 +871,7 @@ pub enum WindowError {
 
 /// ` (their rows run from 0 s to 1194.367328 s)`: what a message about a window no row lay in
 /// adds, so that the user sees which window would have rows (timestamps in µs).
+#[cfg(feature = "parquet")]
 pub(crate) fn span_in_words(first_us: u64, last_us: u64) -> String {
     format!(
         " (their rows run from {} s to {} s)",

@@ -91,6 +91,7 @@ impl std::fmt::Debug for Converter {
 
 /// What a conversion wrote.
 #[derive(Debug, Clone)]
+#[non_exhaustive]
 pub struct Conversion {
     /// The log's file name.
     pub log: String,
@@ -109,8 +110,9 @@ pub struct Conversion {
     /// Things a user should hear about: names that had to change to stay unique (a topic's
     /// file, the log's folder).
     pub notes: Vec<String>,
-    /// The first and the last timestamp (µs) of the rows of the topics converted (all
-    /// topics, or those asked for), in the window or not; `None` when they have no row.
+    /// The earliest first and the latest last timestamp (µs) of the topic instances
+    /// converted (those asked for, or all, whose rows can be read: each instance's first
+    /// and last row in file order), in the window or not; `None` when they have no row.
     pub row_span_us: Option<(u64, u64)>,
 }
 
@@ -856,6 +858,18 @@ impl<'c> Pass<'c> {
                 a.finish(meta)
             }
         });
+        // Of the instances converted: topics asked for, with rows that can be read.
+        let instances = &self.instances;
+        let row_span_us = self
+            .summaries
+            .iter()
+            .filter(|s| {
+                instances
+                    .iter()
+                    .any(|i| i.topic == s.topic.name && i.multi_id == s.topic.multi_id)
+            })
+            .filter_map(|s| Some((s.topic.first_timestamp?, s.topic.last_timestamp?)))
+            .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)));
         let mut files = Vec::with_capacity(self.instances.len());
         let mut renames = Vec::new();
         let mut written_tables = Vec::with_capacity(closed.len());
@@ -888,13 +902,6 @@ impl<'c> Pass<'c> {
                 row_groups,
             });
         }
-        let options = &self.converter.options;
-        let row_span_us = self
-            .summaries
-            .iter()
-            .filter(|s| options.wants(&s.topic.name))
-            .filter_map(|s| Some((s.topic.first_timestamp?, s.topic.last_timestamp?)))
-            .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)));
         let mut topics: Vec<TopicSummary> = self.summaries.into_iter().map(|s| s.topic).collect();
         topics.sort_by(|a, b| (&a.name, a.multi_id).cmp(&(&b.name, b.multi_id)));
         let facts = LogFacts::new(

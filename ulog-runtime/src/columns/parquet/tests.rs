@@ -469,6 +469,34 @@ fn a_new_conversion_of_a_log_replaces_the_files_of_the_earlier_one() {
     );
     let conv = late.convert_reader(&log_bytes(10)[..], "g.ulg").unwrap();
     assert!(conv.files.is_empty(), "{:?}", conv.files);
+    // It says where the rows are: battery rows at 0 to 9 µs, the gyro's at 5 µs.
+    assert_eq!(conv.row_span_us, Some((0, 9)));
+    let window = Window::seconds(Some(1.0), None).unwrap();
+    assert_eq!(
+        conv.lines(&[], &window),
+        [
+            "no Parquet file written: no topic has rows that can be read in the window from 1 s \
+          (their rows run from 0 s to 0.000009 s)"
+        ]
+    );
+    // Of the topics asked for only.
+    let gyro = Converter::new(
+        &root,
+        ParquetOptions {
+            window,
+            topics: vec!["sensors/gyro".into()],
+            ..ParquetOptions::default()
+        },
+    );
+    let conv = gyro.convert_reader(&log_bytes(10)[..], "h.ulg").unwrap();
+    assert_eq!(conv.row_span_us, Some((5, 5)));
+    assert_eq!(
+        conv.lines(&["sensors/gyro".into()], &window),
+        [
+            "no Parquet file written: the topics asked for have no rows that can be read in the \
+          window from 1 s (their rows run from 0.000005 s to 0.000005 s)"
+        ]
+    );
     // metadata.json says the window (its per-topic rows are the whole log's); without
     // one it has no `window`.
     let meta: serde_json::Value =
