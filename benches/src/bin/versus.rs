@@ -214,12 +214,20 @@ fn main() -> ExitCode {
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
+            "--help" | "-h" => {
+                println!(
+                    "versus: whole programs side by side, in one run\n{}",
+                    usage_text()
+                );
+                return ExitCode::SUCCESS;
+            }
             "--runs" => match args.next().and_then(|n| n.parse().ok()) {
                 Some(n) if n > 0 => runs = n,
                 _ => return usage("--runs takes a positive number"),
             },
             "--only" => match args.next() {
-                Some(n) => only.push(n),
+                Some(n) if NAMES.contains(&n.as_str()) => only.push(n),
+                Some(n) => return usage(&format!("no comparison named `{n}`")),
                 None => return usage("--only takes a comparison's name"),
             },
             "--cache" => match args.next().as_deref().and_then(Cache::parse) {
@@ -242,10 +250,21 @@ fn main() -> ExitCode {
     }
 }
 
+/// The comparisons `--only` picks from.
+const NAMES: [&str; 4] = ["parquet", "analysis", "scan", "scan_stream"];
+
+fn usage_text() -> String {
+    format!(
+        "usage: versus [--runs N] [--only NAME]... [--cache read|pages|keep] LOG\n\
+         NAME: {} (all by default); --cache: how the log is put in the page cache first \
+         (read: read once start to end, the default; pages: a 4 KiB page at a time; keep: as \
+         it is)",
+        NAMES.join(", ")
+    )
+}
+
 fn usage(why: &str) -> ExitCode {
-    eprintln!(
-        "versus: {why}\nusage: versus [--runs N] [--only NAME]... [--cache read|pages|keep] LOG"
-    );
+    eprintln!("versus: {why}\n{}", usage_text());
     ExitCode::from(2)
 }
 
@@ -322,9 +341,9 @@ fn compare(log: &str, runs: usize, only: &[String], cache: Cache) -> Result<(), 
     }
     cache.prepare(log)?;
     println!(
-        "CPU: {}; {} runs each, interleaved; log {log}; {}",
+        "CPU: {}; {runs} {} each, interleaved; log {log}; {}",
         cpu_model(),
-        runs,
+        if runs == 1 { "run" } else { "runs" },
         cache.describe()
     );
     let mut results: Vec<(Vec<Measure>, Vec<Measure>)> =
