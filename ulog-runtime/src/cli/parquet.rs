@@ -111,9 +111,10 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
                 let n = c.files.len();
                 writeln!(
                     out,
-                    "{}: {n} {}, {rows} rows, {}",
+                    "{}: {n} {}, {rows} {}, {}",
                     path.display(),
                     if n == 1 { "file" } else { "files" },
+                    if rows == 1 { "row" } else { "rows" },
                     c.metadata.display()
                 )?;
                 for line in c.lines(&messages, &window) {

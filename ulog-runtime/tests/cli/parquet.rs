@@ -470,6 +470,25 @@ fn parquet_options_select_topics_and_time_and_say_what_they_wrote() {
             one.join("small").join("metadata.json").display()
         )
     );
+    // And one row (gps's at 0 s, the only one before 0.5 s).
+    let text = stdout(&[
+        "parquet",
+        log.to_str().unwrap(),
+        "-o",
+        one.to_str().unwrap(),
+        "-m",
+        "gps",
+        "--end",
+        "0.5",
+    ]);
+    assert_eq!(
+        text,
+        format!(
+            "{}: 1 file, 1 row, {}\n",
+            log.display(),
+            one.join("small").join("metadata.json").display()
+        )
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
