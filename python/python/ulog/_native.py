@@ -333,7 +333,8 @@ def to_parquet(
     left out, no file written), and a topic of ``topics`` that no converted log has rows of
     (in the window). Before any log is converted, as ``ulog parquet -m``: KeyError for a
     topic of ``topics`` that no log defines (naming the closest topics the logs have);
-    ValueError for a bound that is NaN, infinite or beyond any log time, an ``end`` at or
+    ValueError for a bound that is NaN, infinite or beyond any time a log can hold (2^64 µs;
+    a window after a log's rows is a warning, not an error), an ``end`` at or
     before ``start``, an empty ``topics`` or a ``threads`` below 1 (TypeError for one that
     is not an integer)."""
     if isinstance(paths, (str, os.PathLike)):
