@@ -452,43 +452,33 @@ fn parquet_options_select_topics_and_time_and_say_what_they_wrote() {
         err.contains("no topic `gsp` in any of the logs; did you mean `gps`?"),
         "{err}"
     );
-    // One file is said in the singular.
+    // One file, and one row, are said in the singular (gps's row at 0 s is its only one
+    // before 0.5 s).
     let one = dir.join("one");
-    let text = stdout(&[
-        "parquet",
-        log.to_str().unwrap(),
-        "-o",
-        one.to_str().unwrap(),
-        "-m",
-        "gps",
-    ]);
-    assert_eq!(
-        text,
-        format!(
-            "{}: 1 file, 10 rows, {}\n",
-            log.display(),
-            one.join("small").join("metadata.json").display()
-        )
-    );
-    // And one row (gps's at 0 s, the only one before 0.5 s).
-    let text = stdout(&[
-        "parquet",
-        log.to_str().unwrap(),
-        "-o",
-        one.to_str().unwrap(),
-        "-m",
-        "gps",
-        "--end",
-        "0.5",
-    ]);
-    assert_eq!(
-        text,
-        format!(
-            "{}: 1 file, 1 row, {}\n",
-            log.display(),
-            one.join("small").join("metadata.json").display()
-        )
-    );
+    for (window, says) in [
+        (&[][..], "1 file, 10 rows"),
+        (&["--end", "0.5"][..], "1 file, 1 row"),
+    ] {
+        let args = [
+            &[
+                "parquet",
+                log.to_str().unwrap(),
+                "-o",
+                one.to_str().unwrap(),
+            ][..],
+            &["-m", "gps"],
+            window,
+        ]
+        .concat();
+        assert_eq!(
+            stdout(&args),
+            format!(
+                "{}: {says}, {}\n",
+                log.display(),
+                one.join("small").join("metadata.json").display()
+            )
+        );
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
