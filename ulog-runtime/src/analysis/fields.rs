@@ -684,15 +684,9 @@ fn reduce_f32_column(values: &[f32], stat: &mut Stat) -> bool {
 #[target_feature(enable = "sse2")]
 fn reduce_f32_column_sse2(values: &[f32], stat: &mut Stat) -> bool {
     use std::arch::x86_64::_mm_set_ps;
-    let Stat::Float {
-        min,
-        max,
-        sum,
-        count,
-    } = stat
-    else {
+    if !matches!(stat, Stat::Float { .. }) {
         return false;
-    };
+    }
     let (blocks, rest) = values.as_chunks::<8>();
     let mut quads = Quads::new();
     for block in blocks {
@@ -712,12 +706,13 @@ fn reduce_f32_column_sse2(values: &[f32], stat: &mut Stat) -> bool {
     if !total.is_finite() {
         return false;
     }
-    if !values.is_empty() {
-        *min = min.min(f64::from(least));
-        *max = max.max(f64::from(most));
-    }
-    *sum += total;
-    *count += values.len() as u64;
+    // (No value: bounds of infinities, which change no bound.)
+    stat.merge(Stat::Float {
+        min: f64::from(least),
+        max: f64::from(most),
+        sum: total,
+        count: values.len() as u64,
+    });
     true
 }
 
@@ -857,15 +852,9 @@ fn fold_float<T: Float>(
     rest: impl Iterator<Item = T> + Clone,
     stat: &mut Stat,
 ) {
-    let Stat::Float {
-        min,
-        max,
-        sum,
-        count,
-    } = stat
-    else {
+    if !matches!(stat, Stat::Float { .. }) {
         return;
-    };
+    }
     let (mut lo, mut hi, mut total) = (
         [T::INFINITY; LANES],
         [T::NEG_INFINITY; LANES],
@@ -889,19 +878,26 @@ fn fold_float<T: Float>(
     }
     let all: f64 = total.into_iter().sum();
     if all.is_finite() {
-        *min = lo.into_iter().map(Into::into).fold(*min, f64::min);
-        *max = hi.into_iter().map(Into::into).fold(*max, f64::max);
-        *sum += all;
-        *count += n;
+        stat.merge(Stat::Float {
+            min: lo.into_iter().map(Into::into).fold(f64::INFINITY, f64::min),
+            max: hi
+                .into_iter()
+                .map(Into::into)
+                .fold(f64::NEG_INFINITY, f64::max),
+            sum: all,
+            count: n,
+        });
         return;
     }
     for v in quads.flatten().chain(rest) {
         let v: f64 = v.into();
         if v.is_finite() {
-            *min = min.min(v);
-            *max = max.max(v);
-            *sum += v;
-            *count += 1;
+            stat.merge(Stat::Float {
+                min: v,
+                max: v,
+                sum: v,
+                count: 1,
+            });
         }
     }
 }

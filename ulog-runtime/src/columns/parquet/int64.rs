@@ -12,7 +12,7 @@ use parquet::basic::Type;
 use parquet::errors::ParquetError;
 use parquet::file::metadata::ColumnIndexBuilder;
 use parquet::file::page_index::column_index::ColumnIndexMetaData;
-use parquet::file::statistics::{Statistics, ValueStatistics};
+use parquet::file::statistics::Statistics;
 
 /// Values a block holds, and a miniblock (the format's usual sizes, parquet-rs's too).
 const BLOCK: usize = 128;
@@ -163,14 +163,8 @@ impl Int64Statistics {
             )
         });
         let statistics = Statistics::Int64(
-            ValueStatistics::new(
-                bounds.map(|b| b.0),
-                bounds.map(|b| b.1),
-                None,
-                Some(0),
-                false,
-            )
-            .with_backwards_compatible_min_max(!self.unsigned),
+            super::statistics::chunk_statistics(bounds)
+                .with_backwards_compatible_min_max(!self.unsigned),
         );
         if !index || self.pages.is_empty() {
             return Ok((statistics, None));

@@ -298,29 +298,17 @@ impl FloatStatistics {
         let nans = (!self.pages.is_empty()).then(|| self.pages.iter().map(|p| p.nans).sum());
         let statistics = if self.kind == Type::DOUBLE {
             Statistics::Double(
-                ValueStatistics::new(
-                    bounds.map(|b| b.0),
-                    bounds.map(|b| b.1),
-                    None,
-                    Some(0),
-                    false,
-                )
-                .with_nan_count(nans)
-                .with_backwards_compatible_min_max(true),
+                chunk_statistics(bounds)
+                    .with_nan_count(nans)
+                    .with_backwards_compatible_min_max(true),
             )
         } else {
             // Bounds of `f32`s, held as `f64`s: exact back.
             let narrow = |v: f64| v as f32;
             Statistics::Float(
-                ValueStatistics::new(
-                    bounds.map(|b| narrow(b.0)),
-                    bounds.map(|b| narrow(b.1)),
-                    None,
-                    Some(0),
-                    false,
-                )
-                .with_nan_count(nans)
-                .with_backwards_compatible_min_max(true),
+                chunk_statistics(bounds.map(|(lo, hi)| (narrow(lo), narrow(hi))))
+                    .with_nan_count(nans)
+                    .with_backwards_compatible_min_max(true),
             )
         };
         let pages: Option<Vec<(f64, f64, u64)>> = self
@@ -351,6 +339,13 @@ impl FloatStatistics {
         ));
         Ok((statistics, Some(builder.build()?)))
     }
+}
+
+/// A chunk's statistics of a required column (no null) whose values lie within `bounds`
+/// (`None`: no value), as parquet-rs's writer makes them, before its type's own settings.
+pub(super) fn chunk_statistics<T>(bounds: Option<(T, T)>) -> ValueStatistics<T> {
+    let (min, max) = bounds.unzip();
+    ValueStatistics::new(min, max, None, Some(0), false)
 }
 
 /// The order of a chunk's pages by their bounds (`greater`: the column's order), as
