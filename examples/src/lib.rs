@@ -278,6 +278,14 @@ impl Scan {
         tally.finish(summary.metadata.subscriptions())
     }
 
+    /// Scans a file by positioned reads, on all cores for large files, each thread reading
+    /// its part a window at a time ([`ulog_runtime::read::fold_file`]).
+    pub fn file(file: &std::fs::File) -> Result<Scan, ReadError> {
+        let (summary, parts) =
+            ulog_runtime::read::fold_file(file, Tally::default, |tally, row| tally.add(row))?;
+        Ok(Scan::from_parts(&summary, parts))
+    }
+
     /// Scans a stream with [`StreamReader`], row by row.
     pub fn stream(input: impl Read) -> Result<Scan, ReadError> {
         let mut tally = Tally::default();

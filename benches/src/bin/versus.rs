@@ -7,7 +7,7 @@
 //!
 //! Before the runs, the log's pages are put in the page cache in a stated way (`--cache`),
 //! since how the cache holds them moves every program's system time, and the memory-mapped
-//! readers' most: on Linux 6.18 a 400 MB log held in 4 KiB pages cost `scan` 0.04 to 0.08 s
+//! readers' most: on Linux 6.18 a 400 MB log held in 4 KiB pages cost `scan --mmap` 0.04 to 0.08 s
 //! of system time where the same log in the large folios of a sequential read cost it
 //! 0.00 to 0.01 s (and `px4_ulog_scan` 0.02 to 0.04 s against 0.01 to 0.02 s). A cache
 //! that has held the log for hours drifts toward small pages (the kernel reclaims parts of
@@ -30,7 +30,8 @@
 //! Comparisons (`--only` picks some):
 //! - `parquet`: `ulog parquet LOG -o DIR` (analysis included) against `ulog-convert LOG DIR`;
 //! - `analysis`: `ulog analyze --json LOG` against `ulog-convert --metadata-only LOG DIR`;
-//! - `scan`: `scan LOG` (memory map, both cores) against `px4_ulog_scan LOG`;
+//! - `scan`: `scan LOG` (positioned reads, both cores) against `px4_ulog_scan LOG`;
+//! - `scan_mmap`: `scan --mmap LOG` (memory map, both cores) against `px4_ulog_scan LOG`;
 //! - `scan_stream`: `scan --stream LOG` (one core) against `px4_ulog_scan LOG`.
 //!
 //! The programs are found beside this one (`target/release/`), `ulog-convert` in
@@ -251,7 +252,7 @@ fn main() -> ExitCode {
 }
 
 /// The comparisons `--only` picks from.
-const NAMES: [&str; 4] = ["parquet", "analysis", "scan", "scan_stream"];
+const NAMES: [&str; 5] = ["parquet", "analysis", "scan", "scan_mmap", "scan_stream"];
 
 fn usage_text() -> String {
     format!(
@@ -324,6 +325,11 @@ fn compare(log: &str, runs: usize, only: &[String], cache: Cache) -> Result<(), 
         (
             "scan",
             prog("scan", scan.clone(), &[log], None),
+            prog("px4_ulog_scan", px4.clone(), &[log], None),
+        ),
+        (
+            "scan_mmap",
+            prog("scan --mmap", scan.clone(), &[log, "--mmap"], None),
             prog("px4_ulog_scan", px4.clone(), &[log], None),
         ),
         (

@@ -286,6 +286,11 @@ fn check(clean: &Clean, damaged: &Damaged, chunk: usize) -> Result<Option<Outcom
         &streamed,
         "whole-file and streaming readers disagree"
     );
+    prop_assert_eq!(
+        &rows,
+        &fold_file_rows(&damaged.bytes, 2).1,
+        "whole-file reader and fold_file disagree"
+    );
     let outcome = judge(clean, damaged, &rows);
     prop_assert!(
         outcome.lost_before_damage.is_empty(),
@@ -491,7 +496,60 @@ fn parallel_whole_file_reading_equals_sequential_streaming() {
             streamed(&bytes),
             "{what}: parallel and sequential reads differ"
         );
+        // The fold by positioned reads of the file, on one thread (windows of the file
+        // walked in turn) and on three (parts read side by side), is the fold in memory.
+        for threads in [1, 3] {
+            let (summary, rows) = fold_file_rows(&bytes, threads);
+            assert_eq!(
+                summary_figures(&summary),
+                summary_figures(&folded),
+                "{what}: fold_file on {threads} threads"
+            );
+            assert_eq!(
+                rows,
+                log.data()
+                    .map(|r| (r.offset as usize, r.data.to_vec()))
+                    .collect::<Vec<_>>(),
+                "{what}: fold_file's rows on {threads} threads"
+            );
+        }
     }
+}
+
+/// What a fold's summary says, comparable.
+fn summary_figures(s: &ulog_runtime::read::Summary) -> (usize, Vec<String>, String, u64) {
+    (
+        s.rows,
+        s.diagnostics.iter().map(ToString::to_string).collect(),
+        format!(
+            "{:?} {:?} {:?} {:?}",
+            s.logged_messages, s.parameter_changes, s.dropouts, s.sync_offsets
+        ),
+        s.metadata.last_timestamp(),
+    )
+}
+
+/// `bytes` written to a file of their own and folded by [`ulog_runtime::read::fold_file_on`]
+/// on `threads` threads: the summary and every row's offset and data, in file order.
+fn fold_file_rows(
+    bytes: &[u8],
+    threads: usize,
+) -> (ulog_runtime::read::Summary, Vec<(usize, Vec<u8>)>) {
+    static FILES: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let path = std::env::temp_dir().join(format!(
+        "ulog-fold-file-{}-{}.ulg",
+        std::process::id(),
+        FILES.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+    ));
+    std::fs::write(&path, bytes).unwrap();
+    let file = std::fs::File::open(&path).unwrap();
+    let folded = ulog_runtime::read::fold_file_on(threads, &file, Vec::new, |rows, row| {
+        rows.push((row.offset as usize, row.data.to_vec()));
+    });
+    drop(file);
+    std::fs::remove_file(&path).unwrap();
+    let (summary, parts) = folded.unwrap();
+    (summary, parts.concat())
 }
 
 /// The streaming reader's memory stays bounded by a few messages whatever the file size

@@ -108,6 +108,12 @@ fn scan_figures_equal_pyulogs() {
         let scan = Scan::log(&log);
         let streamed = Scan::stream(&bytes[..]).unwrap();
         let one_pass = Scan::bytes(&bytes).unwrap();
+        let by_reads = Scan::file(&std::fs::File::open(path).unwrap()).unwrap();
+        assert!(
+            same_scan(&by_reads, &scan),
+            "{}: the scan by positioned reads and the indexed scan differ",
+            short_name(path)
+        );
         assert!(
             same_scan(&one_pass, &scan),
             "{}: one-pass and indexed scans differ",

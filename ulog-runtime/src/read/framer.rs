@@ -276,31 +276,40 @@ impl Framer {
     }
 
     /// The first offset in `from..from + max_scan` where `chain` consecutive strongly
-    /// plausible messages start (whole file in `file`): a message boundary beyond doubt.
+    /// plausible messages start, in the window `[base, base + w.len())` of the file (whole
+    /// to its end if the window reaches it): a message boundary beyond doubt. A chain that
+    /// runs out of the window is not one.
     pub(crate) fn find_boundary(
         &self,
-        file: &[u8],
-        from: usize,
+        w: &[u8],
+        base: u64,
+        from: u64,
         max_scan: usize,
         chain: usize,
-    ) -> Option<usize> {
-        let end = file
+    ) -> Option<u64> {
+        let end = w
             .len()
-            .min(usize::try_from(self.segment_end).unwrap_or(usize::MAX));
-        (from..end.min(from.saturating_add(max_scan))).find(|&q| {
-            let mut at = q;
-            (0..chain).all(|_| {
-                let Some(h) = file.get(at..at + MESSAGE_HEADER_LEN) else {
-                    return false;
-                };
-                let next = at + MESSAGE_HEADER_LEN + usize::from(u16_at(h, 0));
-                let strong = next <= end
-                    && self.plausibility(at as u64, h[2], &file[at + MESSAGE_HEADER_LEN..next])
-                        == Plausibility::Strong;
-                at = next;
-                strong
+            .min(usize::try_from(self.segment_end.saturating_sub(base)).unwrap_or(usize::MAX));
+        let from = usize::try_from(from.checked_sub(base)?).ok()?;
+        (from..end.min(from.saturating_add(max_scan)))
+            .find(|&q| {
+                let mut at = q;
+                (0..chain).all(|_| {
+                    let Some(h) = w.get(at..at + MESSAGE_HEADER_LEN) else {
+                        return false;
+                    };
+                    let next = at + MESSAGE_HEADER_LEN + usize::from(u16_at(h, 0));
+                    let strong = next <= end
+                        && self.plausibility(
+                            base + at as u64,
+                            h[2],
+                            &w[at + MESSAGE_HEADER_LEN..next],
+                        ) == Plausibility::Strong;
+                    at = next;
+                    strong
+                })
             })
-        })
+            .map(|q| base + q as u64)
     }
 
     /// Accepts the message found by [`Framer::peek_data`] (`offset` in the file).

@@ -3,8 +3,10 @@
 
 use std::path::Path;
 
+use super::framer::Framer;
 use super::metadata::Applied;
 use super::threads::on_threads;
+use super::window::Source;
 use super::{
     Diagnostic, Dropout, FileHeader, FlagBits, LoggedMessage, MESSAGE_HEADER_LEN, Metadata,
     ParameterChange, ReadError, Row, Step, Subscription, Walker,
@@ -308,7 +310,7 @@ impl<S: RowSink> Collected<S> {
     fn walk(
         &mut self,
         walker: &mut Walker,
-        data: &[u8],
+        src: &mut impl Source,
         limit: u64,
         worker: bool,
     ) -> Result<Walked, ReadError> {
@@ -317,8 +319,9 @@ impl<S: RowSink> Collected<S> {
             if pos >= limit {
                 return Ok(Walked::Limit);
             }
+            let (data, base, eof) = src.window();
             let (sink, mut latest) = (&mut self.sink, self.max_timestamp);
-            let taken = walker.fast_rows(data, 0, limit, false, |meta, row| {
+            let taken = walker.fast_rows(data, base, limit, false, |meta, row| {
                 sink.row(meta, row.offset, &data[row.data], row.sub, row.timestamp);
                 latest = latest.max(row.timestamp);
                 true
@@ -328,15 +331,30 @@ impl<S: RowSink> Collected<S> {
                 continue;
             }
             if worker {
+                // The message at `pos`, if the window holds all of it.
+                let message = usize::try_from(pos.saturating_sub(base))
+                    .ok()
+                    .filter(|_| pos >= base)
+                    .and_then(|at| {
+                        let h = data.get(at..at + MESSAGE_HEADER_LEN)?;
+                        data.get(
+                            at..at
+                                + MESSAGE_HEADER_LEN
+                                + usize::from(u16::from_le_bytes([h[0], h[1]])),
+                        )
+                    });
+                if message.is_none() && !eof {
+                    // A message the window cuts (the fast path takes only whole ones).
+                    src.refill(pos)?;
+                    continue;
+                }
                 let plain = !walker.framer.is_busy()
-                    && data
-                        .get(pos as usize + 2)
-                        .is_some_and(|t| matches!(t, b'S' | b'L' | b'C' | b'O' | b'P'));
+                    && message.is_some_and(|m| matches!(m[2], b'S' | b'L' | b'C' | b'O' | b'P'));
                 if !plain {
                     return Ok(Walked::Stopped);
                 }
             }
-            match walker.step(data, 0, true)? {
+            match walker.step(data, base, eof)? {
                 Step::Applied {
                     offset,
                     applied,
@@ -363,6 +381,7 @@ impl<S: RowSink> Collected<S> {
                     }
                     Applied::Noted(d) | Applied::Diagnostic(d) => self.diagnostics.push(d),
                 },
+                Step::NeedMore { keep_from } if !eof => src.refill(keep_from)?,
                 Step::NeedMore { .. } | Step::End => return Ok(Walked::End),
             }
         }
@@ -1030,15 +1049,65 @@ pub(crate) fn collect<S: RowSink>(
     threads: usize,
 ) -> Result<(Metadata, Collected<S>), ReadError> {
     let header = FileHeader::parse(data)?;
+    let mut src = data;
+    collect_from(header, &mut src, &data, sink, threads)
+}
+
+/// [`collect`] of a file whose header is `header`, read through `src` (its window at the
+/// start of the file), in `parts` on up to `threads` threads.
+pub(crate) fn collect_from<S: RowSink, P: Parts>(
+    header: FileHeader,
+    src: &mut impl Source,
+    parts: &P,
+    sink: S,
+    threads: usize,
+) -> Result<(Metadata, Collected<S>), ReadError> {
     let mut walker = Walker::new(header);
     let mut all = Collected::new(sink);
     all.diagnostics.extend(walker.meta.header_diagnostic());
     // The definitions and the start of the data, where logs subscribe most topics, on
     // this thread.
-    let prefix = (data.len() / 64).min(8 << 20) as u64;
-    all.walk(&mut walker, data, prefix, false)?;
-    walk_rest(&mut all, &mut walker, data, threads)?;
+    let prefix = (parts.len() / 64).min(8 << 20);
+    all.walk(&mut walker, src, prefix, false)?;
+    walk_rest(&mut all, &mut walker, src, parts, threads)?;
     Ok((walker.meta, all))
+}
+
+/// A file that threads can read parts of side by side: in memory, or by positioned reads.
+pub(crate) trait Parts: Sync {
+    /// What a thread reads its part through.
+    type Part<'p>: Source + Send
+    where
+        Self: 'p;
+    /// The file's length.
+    fn len(&self) -> u64;
+    /// A source whose window starts at `from`.
+    fn part(&self, from: u64) -> Self::Part<'_>;
+    /// [`Framer::find_boundary`] in the megabyte from `from` on.
+    ///
+    /// [`Framer::find_boundary`]: super::framer::Framer::find_boundary
+    fn boundary(&self, framer: &Framer, from: u64) -> Result<Option<u64>, ReadError>;
+}
+
+/// How far from a part's planned start its first boundary is looked for.
+pub(crate) const BOUNDARY_SCAN: usize = 1 << 20;
+/// How many strongly plausible messages in a row make a boundary.
+pub(crate) const BOUNDARY_CHAIN: usize = 4;
+
+impl<'a> Parts for &'a [u8] {
+    type Part<'p>
+        = &'a [u8]
+    where
+        Self: 'p;
+    fn len(&self) -> u64 {
+        <[u8]>::len(self) as u64
+    }
+    fn part(&self, _: u64) -> &'a [u8] {
+        self
+    }
+    fn boundary(&self, framer: &Framer, from: u64) -> Result<Option<u64>, ReadError> {
+        Ok(framer.find_boundary(self, 0, from, BOUNDARY_SCAN, BOUNDARY_CHAIN))
+    }
 }
 
 /// Reads the rest of the file, in parts on several threads when it is large.
@@ -1048,32 +1117,32 @@ pub(crate) fn collect<S: RowSink>(
 /// later ones are read. Its part is used only if this thread's own walk lands exactly on
 /// that boundary with the state the copy had; otherwise this thread reads the part itself.
 /// The result is the same as a sequential read either way.
-fn walk_rest<S: RowSink>(
+fn walk_rest<S: RowSink, P: Parts>(
     all: &mut Collected<S>,
     walker: &mut Walker,
-    data: &[u8],
+    src: &mut impl Source,
+    parts: &P,
     threads: usize,
 ) -> Result<(), ReadError> {
-    let start = walker.framer.pos() as usize;
-    let rest = data.len().saturating_sub(start);
+    let start = walker.framer.pos();
+    let len = parts.len();
+    let rest = len.saturating_sub(start);
     if threads < 2
-        || rest < PARALLEL_MIN_LEN
+        || rest < PARALLEL_MIN_LEN as u64
         || walker.framer.has_segments()
         || walker.framer.is_busy()
     {
-        all.walk(walker, data, u64::MAX, false)?;
+        all.walk(walker, src, u64::MAX, false)?;
         return Ok(());
     }
-    let mut bounds: Vec<usize> = (1..threads)
-        .filter_map(|k| {
-            walker
-                .framer
-                .find_boundary(data, (data.len() * k / threads).max(start), 1 << 20, 4)
-        })
-        .collect();
+    let mut bounds: Vec<u64> = Vec::new();
+    for k in 1..threads as u64 {
+        let near = (len * k / threads as u64).max(start);
+        bounds.extend(parts.boundary(&walker.framer, near)?);
+    }
     bounds.sort_unstable();
     bounds.dedup();
-    bounds.push(data.len());
+    bounds.push(len);
     let snapshot = walker.clone();
     std::thread::scope(|scope| -> Result<(), ReadError> {
         let workers: Vec<_> = bounds
@@ -1081,28 +1150,27 @@ fn walk_rest<S: RowSink>(
             .map(|w| {
                 let (from, to) = (w[0], w[1]);
                 let mut copy = snapshot.clone();
-                let sink = all.sink.fork(to - from);
+                let sink = all
+                    .sink
+                    .fork(usize::try_from(to - from).unwrap_or(usize::MAX));
                 scope.spawn(move || {
-                    copy.framer.resume_at(from as u64, None);
+                    copy.framer.resume_at(from, None);
                     let mut part = Collected::new(sink);
-                    let walked = part.walk(&mut copy, data, to as u64, true);
+                    let mut src = parts.part(from);
+                    let walked = part.walk(&mut copy, &mut src, to, true);
                     (walked.map(|_| ()), copy, part)
                 })
             })
             .collect();
-        let mut limit = bounds[0] as u64;
+        let mut limit = bounds[0];
         for worker in workers {
-            all.walk(walker, data, limit, false)?;
+            all.walk(walker, src, limit, false)?;
             let (walked, copy, part) = worker.join().expect("worker threads do not panic");
             walked?;
             let usable = walker.framer.pos() == limit
                 && !walker.framer.is_busy()
                 && walker.epoch == snapshot.epoch;
-            let next = bounds
-                .iter()
-                .copied()
-                .find(|&b| b as u64 > limit)
-                .unwrap_or(data.len()) as u64;
+            let next = bounds.iter().copied().find(|&b| b > limit).unwrap_or(len);
             if usable {
                 let before = walker.meta.last_timestamp();
                 let dropped: u64 = part.dropouts.iter().map(|d| u64::from(d.duration_ms)).sum();
@@ -1116,7 +1184,7 @@ fn walk_rest<S: RowSink>(
             }
             limit = next;
         }
-        all.walk(walker, data, u64::MAX, false)?;
+        all.walk(walker, src, u64::MAX, false)?;
         Ok(())
     })
 }

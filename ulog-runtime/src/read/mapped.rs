@@ -50,7 +50,9 @@ impl MappedFile {
     /// walked again (a part a worker could not use) are read again from the file. While it
     /// walks, the kernel is told that the walk touches each page once (`MADV_SEQUENTIAL`),
     /// so that the walk neither pays for marking every page in use nor keeps the file in
-    /// the page cache longer than another file read once.
+    /// the page cache longer than another file read once. [`fold_file`](super::fold_file)
+    /// does the same walk by positioned reads, at a cost that does not depend on how the
+    /// page cache holds the file.
     pub fn fold_rows<T, I, F>(&self, init: I, fold: F) -> Result<(Summary, Vec<T>), ReadError>
     where
         T: Send,

@@ -1,6 +1,8 @@
-//! Reading ULog files: zero-copy over bytes or a memory map ([`Log`]), or streaming over any
-//! `io::Read` ([`StreamReader`]). Both share one framer (message boundaries and corruption
-//! recovery) and one interpreter ([`Metadata`]).
+//! Reading ULog files: zero-copy over bytes or a memory map ([`Log`]), streaming over any
+//! `io::Read` ([`StreamReader`]), or one pass over every row on all cores ([`fold_rows`] of
+//! bytes, [`fold_file`] of a file by positioned reads, `MappedFile::fold_rows` of a map).
+//! All share one framer (message boundaries and corruption recovery) and one interpreter
+//! ([`Metadata`]).
 
 mod file;
 mod framer;
@@ -10,9 +12,11 @@ mod log;
 mod mapped;
 mod message;
 mod metadata;
+mod positioned;
 mod stream;
 mod threads;
 mod topics;
+mod window;
 
 #[cfg(feature = "cli")]
 pub(crate) use file::not_a_log_file;
@@ -32,6 +36,7 @@ pub use metadata::{
     Parameter, ParameterChange, Subscription, VersionInfo,
 };
 pub(crate) use metadata::{key_name, text_of};
+pub use positioned::{fold_file, fold_file_on};
 pub use stream::{Event, RawMessage, StreamReader};
 pub(crate) use threads::on_threads;
 pub use topics::{InstanceRows, MissingTopic, Skipped, TopicCheck, TopicSummary, check_topics};

@@ -5,16 +5,12 @@ use std::io::Read;
 
 use super::message::{FileHeader, HEADER_LEN, MessageType};
 use super::metadata::Applied;
+use super::window::{Reading, Window};
 use super::{
     Diagnostic, Dropout, LoggedMessage, Metadata, ParameterChange, ReadError, Row, Step,
     Subscription, Walker,
 };
 use crate::typed::{Topic, TypedDecoder, TypedError};
-
-/// The least free room in the buffer before a read, which asks for all the room there is
-/// (the buffer starts at four of these, 512 KiB; with 64 KiB, `scan --stream` took 30% more
-/// CPU time).
-const CHUNK: usize = 128 * 1024;
 
 /// One thing read from a stream.
 #[derive(Debug, Clone)]
@@ -70,13 +66,8 @@ pub enum Event<'a> {
 /// # Ok(()) }
 /// ```
 pub struct StreamReader<R> {
-    input: R,
-    /// Bytes read; the window is `buf[start..end]`, holding the file from offset `base`.
-    buf: Vec<u8>,
-    start: usize,
-    end: usize,
-    base: u64,
-    eof: bool,
+    /// The bytes read and held.
+    win: Window<Reading<R>>,
     walker: Walker,
     /// A diagnostic to report before the next message (boxed: checked on every row).
     pending: Option<Box<Diagnostic>>,
@@ -133,12 +124,7 @@ impl<R: Read> StreamReader<R> {
         let walker = Walker::new(header);
         let pending = walker.meta.header_diagnostic().map(Box::new);
         Ok(StreamReader {
-            input,
-            buf: vec![0; 4 * CHUNK],
-            start: 0,
-            end: 0,
-            base: HEADER_LEN as u64,
-            eof: false,
+            win: Window::new(Reading(input), HEADER_LEN as u64),
             walker,
             pending,
             last: None,
@@ -169,7 +155,7 @@ impl<R: Read> StreamReader<R> {
         Some(RawMessage {
             offset,
             ty,
-            payload: &self.buf[range],
+            payload: &self.win.buf[range],
         })
     }
 
@@ -203,18 +189,18 @@ impl<R: Read> StreamReader<R> {
     /// Bytes the reader holds for its window of the file: bounded by a few messages
     /// (at most a few hundred kilobytes), whatever the file size.
     pub fn buffered_capacity(&self) -> usize {
-        self.buf.capacity()
+        self.win.buf.capacity()
     }
 
     /// The input.
     pub fn get_ref(&self) -> &R {
-        &self.input
+        &self.win.input.0
     }
 
     /// The input. Reading from it directly takes bytes the reader has not seen: do it only
     /// when the reader is done with it (after [`StreamReader::next_event`] gave `None`).
     pub fn get_mut(&mut self) -> &mut R {
-        &mut self.input
+        &mut self.win.input.0
     }
 
     /// Everything read so far but the data rows.
@@ -270,7 +256,7 @@ impl<R: Read> StreamReader<R> {
         match e {
             TypedError::NoSuchTopic {
                 topic, rust_type, ..
-            } if !self.walker.meta.in_data_section() && !self.eof => {
+            } if !self.walker.meta.in_data_section() && !self.win.eof => {
                 TypedError::DefinitionsNotRead {
                     topic,
                     rust_type,
@@ -301,9 +287,9 @@ impl<R: Read> StreamReader<R> {
         loop {
             // The rows of the current window, as long as they come.
             if self.pending.is_none() {
-                let window = &self.buf[self.start..self.end];
+                let window = self.win.bytes();
                 self.walker
-                    .fast_rows(window, self.base, u64::MAX, false, |meta, row| {
+                    .fast_rows(window, self.win.base, u64::MAX, false, |meta, row| {
                         f(Event::Row(Row {
                             timestamp: row.timestamp,
                             offset: row.offset,
@@ -357,12 +343,12 @@ impl<R: Read> StreamReader<R> {
     ) -> Result<(), E> {
         loop {
             if self.pending.is_none() {
-                let window = &self.buf[self.start..self.end];
+                let window = self.win.bytes();
                 let mut failed = None;
                 self.walker
                     // The metadata is the caller's to read at each row: its latest
                     // timestamp includes the row's, as off the fast path.
-                    .fast_rows(window, self.base, u64::MAX, true, |meta, row| {
+                    .fast_rows(window, self.win.base, u64::MAX, true, |meta, row| {
                         let raw = RawMessage {
                             offset: row.offset,
                             ty: b'D',
@@ -401,8 +387,11 @@ impl<R: Read> StreamReader<R> {
             self.last = None;
             return Ok(Some(Next::Diagnostic(d)));
         }
-        let (start, end) = (self.start, self.end);
-        if let Some(row) = self.walker.fast_row(&self.buf[start..end], self.base) {
+        let (start, end) = (self.win.start, self.win.end);
+        if let Some(row) = self
+            .walker
+            .fast_row(&self.win.buf[start..end], self.win.base)
+        {
             // The payload: the msg_id before the row's data.
             self.last = Some((
                 row.offset,
@@ -417,13 +406,12 @@ impl<R: Read> StreamReader<R> {
             }));
         }
         loop {
-            let window = &self.buf[self.start..self.end];
-            let step = self.walker.step(window, self.base, self.eof)?;
+            let window = self.win.bytes();
+            let step = self.walker.step(window, self.win.base, self.win.eof)?;
             match step {
                 Step::End => return Ok(None),
                 Step::NeedMore { keep_from } => {
-                    let keep_from = keep_from.max(self.base);
-                    self.fill(keep_from)?;
+                    self.win.fill(keep_from)?;
                 }
                 Step::Applied {
                     offset,
@@ -445,11 +433,12 @@ impl<R: Read> StreamReader<R> {
                         self.last = None;
                         (0, 0..0)
                     } else {
-                        let at =
-                            self.start + (offset - self.base) as usize + super::MESSAGE_HEADER_LEN;
+                        let at = self.win.start
+                            + (offset - self.win.base) as usize
+                            + super::MESSAGE_HEADER_LEN;
                         let range = at..at + payload.len();
-                        self.last = Some((offset, self.buf[at - 1], range.clone()));
-                        (self.buf[at - 1], range)
+                        self.last = Some((offset, self.win.buf[at - 1], range.clone()));
+                        (self.win.buf[at - 1], range)
                     };
                     return Ok(Some(match applied {
                         // (A noted message is `Nothing` by now, its note pending.)
@@ -491,7 +480,7 @@ impl<R: Read> StreamReader<R> {
             } => Event::Row(Row {
                 timestamp,
                 offset,
-                data: &self.buf[data],
+                data: &self.win.buf[data],
                 subscription: &self.walker.meta.subscriptions[sub],
                 schema: &self.walker.meta.schema,
             }),
@@ -501,50 +490,6 @@ impl<R: Read> StreamReader<R> {
             }
             Next::Diagnostic(d) => Event::Diagnostic(d),
             Next::Event(e) => e,
-        }
-    }
-
-    /// Drops the bytes before `keep_from` and reads more (at least one byte, or hits the end).
-    fn fill(&mut self, keep_from: u64) -> Result<(), ReadError> {
-        let end = self.base + (self.end - self.start) as u64;
-        if keep_from >= end {
-            // Skip input up to `keep_from` (a jump to an appended segment).
-            let mut to_skip = keep_from - end;
-            (self.start, self.end, self.base) = (0, 0, end);
-            while to_skip > 0 {
-                let n = std::io::copy(&mut (&mut self.input).take(to_skip), &mut std::io::sink())?;
-                if n == 0 {
-                    self.eof = true;
-                    return Ok(());
-                }
-                to_skip -= n;
-                self.base += n;
-            }
-        } else {
-            self.start += (keep_from - self.base) as usize;
-            self.base = keep_from;
-        }
-        // Make room for a chunk: move the window to the front, or grow the buffer.
-        if self.buf.len() - self.end < CHUNK {
-            self.buf.copy_within(self.start..self.end, 0);
-            (self.start, self.end) = (0, self.end - self.start);
-            if self.buf.len() - self.end < CHUNK {
-                self.buf.resize(self.end + 2 * CHUNK, 0);
-            }
-        }
-        loop {
-            match self.input.read(&mut self.buf[self.end..]) {
-                Ok(0) => {
-                    self.eof = true;
-                    return Ok(());
-                }
-                Ok(n) => {
-                    self.end += n;
-                    return Ok(());
-                }
-                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-                Err(e) => return Err(e.into()),
-            }
         }
     }
 }
