@@ -200,6 +200,11 @@ pub fn stream_chunks(data: &[u8]) {
         .iter()
         .map(|d| (d.offset, d.duration_ms))
         .collect();
+    assert_eq!(
+        fold_file_rows(log),
+        expected.rows,
+        "the fold by positioned reads and the whole file differ"
+    );
     let input = Chunked {
         data: log,
         sizes,
@@ -227,6 +232,32 @@ pub fn stream_chunks(data: &[u8]) {
         }
     }
     assert_eq!(seen, expected, "stream and whole file differ");
+}
+
+/// The rows `read::fold_file` gives of `log` written to a file of its own (removed after),
+/// as `stream_chunks` compares them.
+#[allow(clippy::type_complexity)]
+fn fold_file_rows(log: &[u8]) -> Vec<(u64, u16, String, u8, Vec<u8>)> {
+    static CALLS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let path =
+        std::env::temp_dir().join(format!("ulog-fuzz-fold-{}-{call}.ulg", std::process::id()));
+    std::fs::write(&path, log).expect("the temporary folder takes a file");
+    let file = std::fs::File::open(&path).expect("the file just written opens");
+    let (_, parts) = ulog_runtime::read::fold_file(&file, Vec::new, |rows, r| {
+        let s = r.subscription;
+        rows.push((
+            r.offset,
+            s.msg_id,
+            s.name.clone(),
+            s.multi_id,
+            r.data.to_vec(),
+        ));
+    })
+    .expect("a log the whole-file reader reads folds");
+    drop(file);
+    let _ = std::fs::remove_file(&path);
+    parts.concat()
 }
 
 /// A format parses, prints, and parses back to itself; the lax parser never panics.

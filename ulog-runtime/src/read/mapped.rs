@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use super::log::{Fold, RowSink, Summary, Visiting, all_cores, collect, summary};
+use super::walk::{Fold, RowSink, Summary, Visiting, all_cores, collect, summary};
 use super::{Metadata, ReadError, Row};
 
 /// A file mapped read-only into memory. Like every memory-mapped reader, it needs the file

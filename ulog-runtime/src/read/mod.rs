@@ -16,14 +16,14 @@ mod positioned;
 mod stream;
 mod threads;
 mod topics;
+mod walk;
 mod window;
 
 #[cfg(feature = "cli")]
 pub(crate) use file::not_a_log_file;
 pub use file::open_file;
 pub use gps_clock::GpsClock;
-pub use log::{DataRows, Log, Rows, Summary, fold_rows, fold_rows_on, summarize};
-pub(crate) use log::{RowVisitor, all_cores, visit_rows};
+pub use log::{DataRows, Log, Rows};
 #[cfg(feature = "mmap")]
 pub use mapped::MappedFile;
 pub use message::{
@@ -40,6 +40,8 @@ pub use positioned::{fold_file, fold_file_on};
 pub use stream::{Event, RawMessage, StreamReader};
 pub(crate) use threads::on_threads;
 pub use topics::{InstanceRows, MissingTopic, Skipped, TopicCheck, TopicSummary, check_topics};
+pub(crate) use walk::{RowVisitor, all_cores, visit_rows};
+pub use walk::{Summary, fold_rows, fold_rows_on, summarize};
 
 use crate::error::{Diagnostic, DiagnosticKind, ReadError};
 use crate::schema::{Primitive, Schema};

@@ -8,10 +8,10 @@
 use std::fs::File;
 
 use super::framer::Framer;
-use super::log::{
+use super::message::{FileHeader, HEADER_LEN, MESSAGE_HEADER_LEN};
+use super::walk::{
     BOUNDARY_CHAIN, BOUNDARY_SCAN, Fold, Parts, Summary, Visiting, all_cores, collect_from, summary,
 };
-use super::message::{FileHeader, HEADER_LEN, MESSAGE_HEADER_LEN};
 use super::window::{FileAt, POSITIONED_READS, Window, read_full_at};
 use super::{ReadError, Row};
 
