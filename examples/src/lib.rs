@@ -235,7 +235,7 @@ impl Scan {
                 .collect();
             workers
                 .into_iter()
-                .map(|w| w.join().expect("scan threads do not panic"))
+                .map(|w| w.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
                 .collect()
         });
         let mut tally = tallies.remove(0);

@@ -1,9 +1,10 @@
 //! Whole programs side by side, in one run: `ulog` against PX4's flight-review-rs converter
 //! (`ulog-convert`, from `../shared/tools/flight-review-rs/`) and the `scan` example against
 //! px4-ulog 0.6.1 (`px4_ulog_scan`), on the same log, interleaved (ours, theirs, ours...,
-//! the order alternating run by run), page cache warmed by a first untimed run of each.
-//! Prints, per comparison, the medians of wall time, CPU time (user + system) and peak
-//! resident memory of both programs and their ratios, with the CPU model.
+//! the order alternating run by run), page cache warmed by a first untimed run of each
+//! (which, for the scans, also checks that both programs print the same figures: the same
+//! rows, leaves and sum). Prints, per comparison, the medians of wall time, CPU time (user +
+//! system) and peak resident memory of both programs and their ratios, with the CPU model.
 //!
 //! Before the runs, the log's pages are put in the page cache in a stated way (`--cache`),
 //! since how the cache holds them moves every program's system time, and the memory-mapped
@@ -61,7 +62,14 @@ struct Program {
 }
 
 impl Program {
+    /// Runs the program once: its measure.
     fn run(&self) -> Result<Measure, String> {
+        self.run_keeping(false).map(|(m, _)| m)
+    }
+
+    /// Runs the program once: its measure, and, if `keep_output`, what it printed (read
+    /// once it ended, so at most a pipe's buffer, 64 KiB on Linux: the scans' one line).
+    fn run_keeping(&self, keep_output: bool) -> Result<(Measure, String), String> {
         if let Some(out) = &self.out {
             if out.exists() {
                 std::fs::remove_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
@@ -71,7 +79,11 @@ impl Program {
         let start = Instant::now();
         let child = Command::new(&self.path)
             .args(&self.args)
-            .stdout(Stdio::null())
+            .stdout(if keep_output {
+                Stdio::piped()
+            } else {
+                Stdio::null()
+            })
             .stderr(Stdio::piped())
             .spawn()
             .map_err(|e| format!("{}: {e}", self.path.display()))?;
@@ -92,14 +104,32 @@ impl Program {
                 use std::io::Read;
                 let _ = e.read_to_string(&mut err);
             }
-            return Err(format!("{} failed (status {status}): {err}", self.label));
+            let how = if libc::WIFEXITED(status) {
+                format!("exit code {}", libc::WEXITSTATUS(status))
+            } else if libc::WIFSIGNALED(status) {
+                format!("signal {}", libc::WTERMSIG(status))
+            } else {
+                format!("wait status {status}")
+            };
+            let err = err.trim_end();
+            let sep = if err.is_empty() { "" } else { ": " };
+            return Err(format!("{} failed ({how}){sep}{err}", self.label));
+        }
+        let mut printed = String::new();
+        if let Some(mut o) = child.stdout {
+            use std::io::Read;
+            o.read_to_string(&mut printed)
+                .map_err(|e| format!("{}: {e}", self.label))?;
         }
         let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 / 1e6;
-        Ok(Measure {
-            wall,
-            cpu: secs(usage.ru_utime) + secs(usage.ru_stime),
-            rss_mib: usage.ru_maxrss as f64 / 1024.0,
-        })
+        Ok((
+            Measure {
+                wall,
+                cpu: secs(usage.ru_utime) + secs(usage.ru_stime),
+                rss_mib: usage.ru_maxrss as f64 / 1024.0,
+            },
+            printed,
+        ))
     }
 }
 
@@ -257,6 +287,7 @@ const NAMES: [&str; 5] = ["parquet", "analysis", "scan", "scan_mmap", "scan_stre
 fn usage_text() -> String {
     format!(
         "usage: versus [--runs N] [--only NAME]... [--cache read|pages|keep] LOG\n\
+         --runs: timed runs of each program (default 5; the medians are printed); \
          NAME: {} (all by default); --cache: how the log is put in the page cache first \
          (read: read once start to end, the default; pages: a 4 KiB page at a time; keep: as \
          it is)",
@@ -346,19 +377,30 @@ fn compare(log: &str, runs: usize, only: &[String], cache: Cache) -> Result<(), 
         return Err(format!("no comparison named {only:?}"));
     }
     cache.prepare(log)?;
+    let mut results: Vec<(Vec<Measure>, Vec<Measure>)> =
+        vec![(Vec::new(), Vec::new()); chosen.len()];
+    // A first run of each warms the page cache and checks that both work (and, for the
+    // scans, that both print the same figures: the same work done).
+    for (name, ours, theirs) in &chosen {
+        let scans = name.starts_with("scan");
+        let (_, mine) = ours.run_keeping(scans)?;
+        let (_, other) = theirs.run_keeping(scans)?;
+        if mine != other {
+            return Err(format!(
+                "{} and {} printed different figures:\n{}\n{}",
+                ours.label,
+                theirs.label,
+                mine.trim_end(),
+                other.trim_end()
+            ));
+        }
+    }
     println!(
-        "CPU: {}; {runs} {} each, interleaved; log {log}; {}",
+        "CPU: {}; medians of {runs} {} each, interleaved; log {log}; {}",
         cpu_model(),
         if runs == 1 { "run" } else { "runs" },
         cache.describe()
     );
-    let mut results: Vec<(Vec<Measure>, Vec<Measure>)> =
-        vec![(Vec::new(), Vec::new()); chosen.len()];
-    // A first run of each warms the page cache and checks that both work.
-    for (_, ours, theirs) in &chosen {
-        ours.run()?;
-        theirs.run()?;
-    }
     for r in 0..runs {
         for (i, (_, ours, theirs)) in chosen.iter().enumerate() {
             if r % 2 == 0 {

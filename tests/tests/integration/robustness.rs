@@ -516,6 +516,41 @@ fn parallel_whole_file_reading_equals_sequential_streaming() {
     }
 }
 
+/// A panic in a fold's closure on a thread that reads a part ahead reaches the caller as that
+/// panic (its own message), from the fold of bytes and the fold of a file alike.
+#[test]
+fn a_panic_in_a_fold_reaches_the_caller_as_itself() {
+    let Some(clean) = cleans().iter().max_by_key(|c| c.bytes.len()) else {
+        assert!(!ulog_tests::under_ci(), "no clean corpus file");
+        return;
+    };
+    let big = examples::inflate(&clean.bytes, 24_000_000).unwrap();
+    // A row in the last of three parts.
+    let late = big.len() as u64 * 5 / 6;
+    let fold = |_: &mut (), row: &ulog_runtime::Row<'_>| {
+        if row.offset > late {
+            panic!("the fold's own panic");
+        }
+    };
+    let path = std::env::temp_dir().join(format!("ulog-fold-panic-{}.ulg", std::process::id()));
+    std::fs::write(&path, &big).unwrap();
+    let file = std::fs::File::open(&path).unwrap();
+    let panics = [
+        std::panic::catch_unwind(|| ulog_runtime::read::fold_rows_on(3, &big, || (), fold)),
+        std::panic::catch_unwind(|| ulog_runtime::read::fold_file_on(3, &file, || (), fold)),
+    ];
+    drop(file);
+    std::fs::remove_file(&path).unwrap();
+    for (what, p) in ["fold_rows", "fold_file"].into_iter().zip(panics) {
+        let payload = p.expect_err(what);
+        assert_eq!(
+            payload.downcast_ref::<&str>(),
+            Some(&"the fold's own panic"),
+            "{what}"
+        );
+    }
+}
+
 /// What a fold's summary says, comparable.
 fn summary_figures(s: &ulog_runtime::read::Summary) -> (usize, Vec<String>, String, u64) {
     (

@@ -695,7 +695,12 @@ impl Analysis {
             let (rest, beside) = std::thread::scope(|s| {
                 let beside = s.spawn(|| visit_rows(bytes, fields::FieldStats::default(), 1));
                 let rest = visit_rows(bytes, Analyzer::of_parts(rest), 1);
-                (rest, beside.join().expect("the analyses do not panic"))
+                (
+                    rest,
+                    beside
+                        .join()
+                        .unwrap_or_else(|p| std::panic::resume_unwind(p)),
+                )
             });
             let (summary, mut analyzer) = rest?;
             let (_, beside) = beside?;

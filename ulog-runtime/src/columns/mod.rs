@@ -1158,7 +1158,7 @@ impl Log<'_> {
                     .collect();
                 handles
                     .into_iter()
-                    .map(|h| h.join().expect("a columns pass does not panic"))
+                    .map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
                     .collect()
             })
         };

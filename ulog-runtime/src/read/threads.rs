@@ -7,7 +7,7 @@ use std::sync::Mutex;
 /// of its own (or, if the system refuses that thread, on this one after the first).
 ///
 /// # Panics
-/// If `f` panics on a thread.
+/// If `f` panics on any thread: with `f`'s panic.
 pub(crate) fn on_threads<W: Send, R: Send>(work: Vec<W>, f: impl Fn(W) -> R + Sync) -> Vec<R> {
     // Each item taken by whichever thread does it.
     let items: Vec<Mutex<Option<W>>> = work.into_iter().map(|w| Mutex::new(Some(w))).collect();
@@ -28,7 +28,7 @@ pub(crate) fn on_threads<W: Send, R: Send>(work: Vec<W>, f: impl Fn(W) -> R + Sy
         let mut out: Vec<R> = run(0).into_iter().collect();
         for (k, thread) in threads {
             let done = match thread {
-                Ok(t) => t.join().expect("work on a thread does not panic"),
+                Ok(t) => t.join().unwrap_or_else(|p| std::panic::resume_unwind(p)),
                 // A thread the system refused: its item is done here.
                 Err(_) => run(k),
             };

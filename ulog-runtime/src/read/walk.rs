@@ -284,9 +284,22 @@ pub(crate) fn summary<S: RowSink>(metadata: Metadata, all: Collected<S>) -> Summ
 
 /// Walks a whole file as [`summarize`] does and folds every row into an accumulator as it is
 /// found: the fastest way through every row, as it reads the file once and, for large files,
-/// on all cores. Each thread folds a contiguous part of the file into its own accumulator,
-/// made by `init`; the accumulators come back in file order, so combining them in that order
-/// gives the same result on every run. The rows are exactly those [`Log::data`] yields.
+/// on all cores. Each thread folds a contiguous part of the file into accumulators of its
+/// own, made by `init`; the accumulators come back in file order, so combining them in that
+/// order gives the same result on every run. The rows are exactly those [`Log::data`]
+/// yields, each in exactly one accumulator.
+///
+/// What to expect of the closures:
+/// - `init` is called once for a file below 8 MB, and up to `2 × threads - 1` times for a
+///   larger one (an accumulator may stay empty).
+/// - `fold` may also see rows that end up in no accumulator. A thread that reads a part
+///   ahead starts at a message boundary it finds; its part is kept only if the sequential
+///   walk lands on that boundary in the same state, else it is dropped and the sequential
+///   walk folds those rows again (a damaged file, or a log that defines formats or
+///   subscribes anew in the middle: a log written twice into one file, say). So keep the
+///   result in the accumulator: a side effect of `fold` (a counter, a channel, a print)
+///   may happen twice for some rows.
+/// - A panic in `fold` or `init` on any thread reaches the caller as that panic.
 ///
 /// ```
 /// # use ulog_runtime::read::{fold_rows, FileHeader, Message};
@@ -551,7 +564,9 @@ fn walk_rest<S: RowSink, P: Parts>(
         let mut limit = bounds[0];
         for worker in workers {
             all.walk(walker, src, limit, false)?;
-            let (walked, copy, part) = worker.join().expect("worker threads do not panic");
+            let (walked, copy, part) = worker
+                .join()
+                .unwrap_or_else(|p| std::panic::resume_unwind(p));
             walked?;
             let usable = walker.framer.pos() == limit
                 && !walker.framer.is_busy()

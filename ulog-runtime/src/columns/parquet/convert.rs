@@ -281,7 +281,7 @@ impl Converter {
             if encoder.threads() > 0 {
                 encoder.work();
             }
-            let digest = hashing.map(|h| h.join().expect("hashing does not panic"));
+            let digest = hashing.map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)));
             (pass, digest)
         });
         let (pass, meta, read) = pass?;
