@@ -51,8 +51,8 @@ impl MappedFile {
     /// walks, the kernel is told that the walk touches each page once (`MADV_SEQUENTIAL`),
     /// so that the walk neither pays for marking every page in use nor keeps the file in
     /// the page cache longer than another file read once. [`fold_file`](super::fold_file)
-    /// does the same walk by positioned reads, at a cost that does not depend on how the
-    /// page cache holds the file.
+    /// does the same walk by positioned reads, at a cost that depends less on how the page
+    /// cache holds the file.
     pub fn fold_rows<T, I, F>(&self, init: I, fold: F) -> Result<(Summary, Vec<T>), ReadError>
     where
         T: Send,

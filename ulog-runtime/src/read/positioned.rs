@@ -19,7 +19,8 @@ use super::{ReadError, Row};
 /// reads: on all cores for a large file (up to 8), each thread reading its part in windows
 /// of a few hundred kilobytes. The result is [`fold_rows`](super::fold_rows)'s on the
 /// file's bytes: the same rows, the accumulators in file order; what it says of `init` and
-/// `fold` holds here too (`fold` may see some rows twice, the result has each once).
+/// `fold` holds here too (`fold` may see rows that end up in no accumulator; the
+/// accumulators have each row once).
 ///
 /// Which one-pass reader to use:
 /// - this one, for a file, when the page cache's state is not known (the usual case);
@@ -32,23 +33,25 @@ use super::{ReadError, Row};
 /// - [`fold_rows`](super::fold_rows) for bytes already in memory.
 ///
 /// Against a memory map ([`MappedFile::fold_rows`](super::MappedFile::fold_rows)):
-/// - The cost per byte does not depend on how the kernel holds the file in its page cache.
-///   A map pays for every page it maps and gives back, which costs more when the cache
-///   holds the file in 4 KiB pages (a file read piecemeal, or a cache that has been
-///   reclaimed and refilled) than in the large folios a file read from start to end sits in;
-///   a read copies the bytes at the same cost either way. On a 400 MB log, against
-///   px4-ulog's CPU time, the map's walk took 0.33 (large folios) to 0.45 (4 KiB pages) and
-///   this one 0.36 to 0.43 (the README's section "Side by side with PX4's converter and
-///   px4-ulog").
-/// - A file truncated by another process meanwhile ends the walk early, reported as a
-///   truncated last message, where a map's read of a page the file no longer has ends the
-///   process (`SIGBUS`).
-/// - Memory: a window of at most a few hundred kilobytes per thread.
+/// - The cost depends less on how the kernel holds the file in its page cache. A map pays
+///   for every page it maps and gives back, which costs much more when the cache holds the
+///   file in 4 KiB pages (a file read piecemeal, or a cache that has been reclaimed and
+///   refilled) than in the large folios a file read from start to end sits in; a read
+///   copies every byte either way, and only its lookup of the cached pages costs more with
+///   small ones. On a 400 MB log, against px4-ulog's CPU time, the map's walk took 0.33
+///   (large folios) to 0.45 (4 KiB pages) and this one 0.36 to 0.43 (the README's section
+///   "Side by side with PX4's converter and px4-ulog").
+/// - A file truncated by another process meanwhile ends the walk early (a message the cut
+///   falls in is reported as truncated; rows already read into a window are still folded),
+///   where a map's read of a page the file no longer has ends the process (`SIGBUS`).
+/// - Memory: a window of a few hundred kilobytes per thread, and, before the threads start,
+///   a buffer of 1.3 MB for the search of each part's first boundary, one at a time.
 ///
-/// The file is read from its start, whatever its cursor; the cursor does not move (on
-/// platforms other than Unix and Windows, which have no positioned reads, the file is read
-/// on one thread through its cursor). A file that is not seekable, such as a pipe, is an
-/// I/O error: read it with [`StreamReader`](super::StreamReader).
+/// The file is read from its start, whatever its cursor. On Unix the cursor does not move;
+/// on Windows each read moves it (`seek_read`), which does not matter to reads that each
+/// give their own position; on other platforms, which have no positioned reads, the file
+/// is read on one thread through its cursor. A file that is not seekable, such as a pipe,
+/// is an I/O error: read it with [`StreamReader`](super::StreamReader).
 ///
 /// ```no_run
 /// use ulog_runtime::read::{fold_file, open_file};

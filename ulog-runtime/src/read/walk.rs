@@ -34,7 +34,7 @@ pub(crate) trait RowSink: Send + Sized {
 
 /// Counts rows ([`summarize`]).
 #[derive(Default)]
-struct RowCount(usize);
+pub(super) struct RowCount(usize);
 
 impl RowSink for RowCount {
     #[inline]
@@ -293,12 +293,14 @@ pub(crate) fn summary<S: RowSink>(metadata: Metadata, all: Collected<S>) -> Summ
 /// - `init` is called once for a file below 8 MB, and up to `2 × threads - 1` times for a
 ///   larger one (an accumulator may stay empty).
 /// - `fold` may also see rows that end up in no accumulator. A thread that reads a part
-///   ahead starts at a message boundary it finds; its part is kept only if the sequential
-///   walk lands on that boundary in the same state, else it is dropped and the sequential
-///   walk folds those rows again (a damaged file, or a log that defines formats or
-///   subscribes anew in the middle: a log written twice into one file, say). So keep the
-///   result in the accumulator: a side effect of `fold` (a counter, a channel, a print)
-///   may happen twice for some rows.
+///   ahead starts at a message boundary it finds, with the subscriptions known when the
+///   walk split; its part is kept only if the sequential walk lands on that boundary in
+///   the same state, else it is dropped and the sequential walk folds those rows again (a
+///   damaged file, or a log that defines formats or subscribes anew in the middle: a log
+///   written twice into one file, say). A dropped part's rows may even have been read
+///   under an older subscription of their `msg_id`. So keep the result in the accumulator:
+///   a side effect of `fold` (a counter, a channel, a print) may happen for rows the
+///   result does not have, or has under another topic.
 /// - A panic in `fold` or `init` on any thread reaches the caller as that panic.
 ///
 /// ```
@@ -536,7 +538,10 @@ fn walk_rest<S: RowSink, P: Parts>(
     }
     let mut bounds: Vec<u64> = Vec::new();
     for k in 1..threads as u64 {
-        let near = (len * k / threads as u64).max(start);
+        // (In 128 bits: the length of a sparse file can be near 2^63.)
+        let near = u64::try_from(u128::from(len) * u128::from(k) / threads as u128)
+            .unwrap_or(len)
+            .max(start);
         bounds.extend(parts.boundary(&walker.framer, near)?);
     }
     bounds.sort_unstable();
@@ -561,13 +566,25 @@ fn walk_rest<S: RowSink, P: Parts>(
                 })
             })
             .collect();
+        // A worker's panic (the caller's `fold`, say) reaches the caller as itself, even when
+        // the walk fails meanwhile: every worker is joined before an error is returned.
+        let join = |w: std::thread::ScopedJoinHandle<'_, _>| {
+            w.join().unwrap_or_else(|p| std::panic::resume_unwind(p))
+        };
+        let mut workers = workers.into_iter();
         let mut limit = bounds[0];
-        for worker in workers {
-            all.walk(walker, src, limit, false)?;
-            let (walked, copy, part) = worker
-                .join()
-                .unwrap_or_else(|p| std::panic::resume_unwind(p));
-            walked?;
+        let mut failed = None;
+        for worker in workers.by_ref() {
+            if let Err(e) = all.walk(walker, src, limit, false) {
+                let _ = join(worker);
+                failed = Some(e);
+                break;
+            }
+            let (walked, copy, part) = join(worker);
+            if let Err(e) = walked {
+                failed = Some(e);
+                break;
+            }
             let usable = walker.framer.pos() == limit
                 && !walker.framer.is_busy()
                 && walker.epoch == snapshot.epoch;
@@ -584,6 +601,12 @@ fn walk_rest<S: RowSink, P: Parts>(
                 all.append(part, before);
             }
             limit = next;
+        }
+        if let Some(e) = failed {
+            for w in workers {
+                let _ = join(w);
+            }
+            return Err(e);
         }
         all.walk(walker, src, u64::MAX, false)?;
         Ok(())

@@ -37,8 +37,8 @@ impl<R: Read> Input for Reading<R> {
     }
 }
 
-/// A file read from a position of its own, without moving the file's cursor (`pread`), so
-/// that threads read one file side by side.
+/// A file read from a position of its own (`pread`; `seek_read` on Windows), so that threads
+/// read one file side by side.
 pub(super) struct FileAt<'f> {
     file: &'f File,
     pos: u64,
@@ -50,7 +50,7 @@ impl<'f> FileAt<'f> {
     }
 }
 
-/// Whether [`FileAt`] reads without the file's cursor, so that threads can share a file.
+/// Whether [`FileAt`] reads at positions of its own, so that threads can share a file.
 pub(super) const POSITIONED_READS: bool = cfg!(any(unix, windows));
 
 impl Input for FileAt<'_> {
@@ -169,6 +169,8 @@ impl<I: Input> Window<I> {
                 }
                 Ok(n) => {
                     self.end += n;
+                    // A file that grew after its end was met.
+                    self.eof = false;
                     return Ok(());
                 }
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => {}

@@ -970,3 +970,65 @@ fn rows_of_subscriptions_numbered_past_the_index_s_two_bytes_are_found_from_thei
     let last = &log.subscriptions()[65_536];
     assert_eq!(log.rows(last).map(|r| r.timestamp).collect::<Vec<_>>(), [3]);
 }
+
+/// A file the walk is told is near 2^64 bytes long (a sparse file can claim 2^63) splits
+/// without overflowing, and reads what it holds.
+#[test]
+fn a_file_length_near_the_end_of_u64_splits_without_overflow() {
+    struct Huge<'a>(&'a [u8]);
+    impl<'a> walk::Parts for Huge<'a> {
+        type Part<'p>
+            = &'a [u8]
+        where
+            Self: 'p;
+        fn len(&self) -> u64 {
+            u64::MAX - 7
+        }
+        fn part(&self, _: u64) -> &'a [u8] {
+            self.0
+        }
+        fn boundary(&self, _: &framer::Framer, _: u64) -> Result<Option<u64>, ReadError> {
+            Ok(None)
+        }
+    }
+    let (f, offsets) = clean(30);
+    let header = FileHeader::parse(&f.0).unwrap();
+    let mut src = &f.0[..];
+    let (_, all) =
+        walk::collect_from(header, &mut src, &Huge(&f.0), walk::RowCount::default(), 3).unwrap();
+    assert_eq!(walk::RowSink::len(&all.sink), offsets.len());
+}
+
+/// A window that met the end of its input reads on when the input has grown (a log still
+/// being written): the end is no longer taken for the end of the file.
+#[test]
+fn a_window_at_the_end_reads_on_when_the_input_grows() {
+    /// Its bytes up to `limit`, then nothing (0) until the limit moves.
+    struct Growing {
+        bytes: Vec<u8>,
+        at: usize,
+        limit: usize,
+    }
+    impl std::io::Read for Growing {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            let n = buf.len().min(self.limit - self.at);
+            buf[..n].copy_from_slice(&self.bytes[self.at..self.at + n]);
+            self.at += n;
+            Ok(n)
+        }
+    }
+    let input = Growing {
+        bytes: (0..100).collect(),
+        at: 0,
+        limit: 50,
+    };
+    let mut w = window::Window::new(window::Reading(input), 0);
+    w.fill(0).unwrap();
+    assert_eq!((w.bytes().len(), w.eof), (50, false));
+    w.fill(0).unwrap();
+    assert!(w.eof, "the input said it had nothing more");
+    w.input.0.limit = 100;
+    w.fill(0).unwrap();
+    assert!(!w.eof, "more came after the end");
+    assert_eq!(w.bytes(), &(0..100).collect::<Vec<u8>>()[..]);
+}
