@@ -115,7 +115,12 @@ enum Walked {
 }
 
 /// Below this many bytes of data a file is read on one thread.
+#[cfg(not(fuzzing))]
 const PARALLEL_MIN_LEN: usize = 8 << 20;
+/// In a fuzzing build, a few hundred bytes: the fuzzer's small inputs are split between
+/// threads too, so that it tries the parallel walk's boundaries and checks.
+#[cfg(fuzzing)]
+const PARALLEL_MIN_LEN: usize = 256;
 
 impl<S: RowSink> Collected<S> {
     fn new(sink: S) -> Collected<S> {
