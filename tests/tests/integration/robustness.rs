@@ -447,15 +447,23 @@ fn streamed(bytes: &[u8]) -> Everything {
     )
 }
 
+/// The largest clean corpus log inflated to 24 MB, which the readers split between threads;
+/// `None` without a corpus (a failure under CI).
+fn large_clean_log() -> Option<Vec<u8>> {
+    let Some(clean) = cleans().iter().max_by_key(|c| c.bytes.len()) else {
+        assert!(!ulog_tests::under_ci(), "no clean corpus file");
+        return None;
+    };
+    Some(examples::inflate(&clean.bytes, 24_000_000).unwrap())
+}
+
 /// Large files are read on several threads; the result must be exactly the sequential one,
 /// clean or damaged (damage near the parts' boundaries included).
 #[test]
 fn parallel_whole_file_reading_equals_sequential_streaming() {
-    let Some(clean) = cleans().iter().max_by_key(|c| c.bytes.len()) else {
-        assert!(!ulog_tests::under_ci(), "no clean corpus file");
+    let Some(big) = large_clean_log() else {
         return;
     };
-    let big = examples::inflate(&clean.bytes, 24_000_000).unwrap();
     let len = big.len();
     let mut cases = vec![("clean", big.clone())];
     for at in [len / 2, len / 3, 2 * len / 3, len / 4 + 1, 3 * len / 4 - 7] {
@@ -520,11 +528,9 @@ fn parallel_whole_file_reading_equals_sequential_streaming() {
 /// panic (its own message), from the fold of bytes and the fold of a file alike.
 #[test]
 fn a_panic_in_a_fold_reaches_the_caller_as_itself() {
-    let Some(clean) = cleans().iter().max_by_key(|c| c.bytes.len()) else {
-        assert!(!ulog_tests::under_ci(), "no clean corpus file");
+    let Some(big) = large_clean_log() else {
         return;
     };
-    let big = examples::inflate(&clean.bytes, 24_000_000).unwrap();
     // A row in the last of three parts.
     let late = big.len() as u64 * 5 / 6;
     let fold = |_: &mut (), row: &ulog_runtime::Row<'_>| {
