@@ -11,8 +11,8 @@
 //! - `walk`: (a) message boundaries: every message framed and validated, corruption recovery
 //!   armed, rows counted (`read::summarize`);
 //! - `open`: `walk` plus the row index (`Log::from_slice`);
-//! - `decode_leaves`: (b) every leaf of every row decoded in one pass (`read::fold_rows`, as
-//!   the `scan` example does);
+//! - `decode_leaves`: (b) every leaf of every row decoded in one pass (`read::fold_rows`, the
+//!   walk the `scan` example makes over a file, here over bytes in memory);
 //! - `open_then_decode`: `open`, then the leaves decoded from the index (`Scan::log`);
 //! - `stream_leaves`: the same through `StreamReader` (memory bounded by a few messages), one
 //!   thread;
