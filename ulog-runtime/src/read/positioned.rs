@@ -9,9 +9,7 @@ use std::fs::File;
 
 use super::framer::Framer;
 use super::message::{FileHeader, HEADER_LEN, MESSAGE_HEADER_LEN};
-use super::walk::{
-    BOUNDARY_CHAIN, BOUNDARY_SCAN, Fold, Parts, Summary, Visiting, all_cores, collect_from, summary,
-};
+use super::walk::{BOUNDARY_CHAIN, BOUNDARY_SCAN, Parts, Summary, all_cores, fold_from};
 use super::window::{FileAt, POSITIONED_READS, Window, read_full_at};
 use super::{ReadError, Row};
 
@@ -81,7 +79,7 @@ where
     I: Fn() -> T + Sync,
     F: Fn(&mut T, &Row<'_>) + Sync,
 {
-    let threads = if POSITIONED_READS { threads.max(1) } else { 1 };
+    let threads = if POSITIONED_READS { threads } else { 1 };
     let mut header = [0u8; HEADER_LEN];
     let got = read_full_at(file, &mut header, 0).map_err(not_seekable)?;
     let header = FileHeader::parse(&header[..got])?;
@@ -90,15 +88,7 @@ where
         len: file.metadata()?.len(),
     };
     let mut src = parts.part(HEADER_LEN as u64);
-    let (metadata, mut all) = collect_from(
-        header,
-        &mut src,
-        &parts,
-        Visiting::new(Fold::new(&init, &fold)),
-        threads,
-    )?;
-    let parts = std::mem::take(&mut all.sink.visitor.parts);
-    Ok((summary(metadata, all), parts))
+    fold_from(header, &mut src, &parts, threads, &init, &fold)
 }
 
 /// A read error; for a file without positions (a pipe), one that says what reads it.

@@ -347,11 +347,29 @@ where
     I: Fn() -> T + Sync,
     F: Fn(&mut T, &Row<'_>) + Sync,
 {
-    let (metadata, mut all) = collect(
-        bytes,
-        Visiting::new(Fold::new(&init, &fold)),
-        threads.max(1),
-    )?;
+    let header = FileHeader::parse(bytes)?;
+    let mut src = bytes;
+    fold_from(header, &mut src, &bytes, threads, &init, &fold)
+}
+
+/// Folds every row of a file whose header is `header`, read through `src` (its window at the
+/// start of the file) and in `parts` on up to `threads` threads: [`fold_rows`] of bytes,
+/// [`fold_file`](super::fold_file) of a file.
+pub(crate) fn fold_from<T, I, F, P: Parts>(
+    header: FileHeader,
+    src: &mut impl Source,
+    parts: &P,
+    threads: usize,
+    init: &I,
+    fold: &F,
+) -> Result<(Summary, Vec<T>), ReadError>
+where
+    T: Send,
+    I: Fn() -> T + Sync,
+    F: Fn(&mut T, &Row<'_>) + Sync,
+{
+    let sink = Visiting::new(Fold::new(init, fold));
+    let (metadata, mut all) = collect_from(header, src, parts, sink, threads.max(1))?;
     let parts = std::mem::take(&mut all.sink.visitor.parts);
     Ok((summary(metadata, all), parts))
 }
