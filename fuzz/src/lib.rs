@@ -7,7 +7,7 @@
 //! A check panics (which the fuzzer reports) when the library panics, hangs or
 //! breaks a promise: the streaming reader not yielding what the whole-file reader yields, a
 //! format that does not print back to itself, a layout whose fields leave it, a decoded
-//! value that does not encode back, a writer whose accepted operations do not read back, a
+//! value that does not encode back, a flight report not made, a writer whose accepted operations do not read back, a
 //! Parquet file that does not read back with its rows and its statistics.
 
 #![allow(missing_docs, clippy::missing_panics_doc)]
@@ -20,8 +20,8 @@ use ulog_runtime::schema::{Format, Schema};
 use ulog_runtime::{Event, Log, StreamReader, ULog, Value, Writer, WriterOptions};
 
 /// The flight analysis of a log's bytes (its walks on two threads) equals that of its stream
-/// (one pass), but for the per-field means, summed in another order.
-fn analysis(log: &Log<'_>, data: &[u8]) {
+/// (one pass), but for the per-field means, summed in another order. Gives the first.
+fn analysis(log: &Log<'_>, data: &[u8]) -> ulog_runtime::analysis::Analysis {
     use ulog_runtime::analysis::Analysis;
     let walked = Analysis::of_log(log);
     let Ok(streamed) = Analysis::of_reader(data) else {
@@ -40,15 +40,25 @@ fn analysis(log: &Log<'_>, data: &[u8]) {
             || w.mean == s.mean;
         assert!(close, "{w:?} vs {s:?}");
     }
-    let strip = |mut a: Analysis| {
+    let strip = |a: &Analysis| {
+        let mut a = a.clone();
         a.field_stats.clear();
         format!("{a:?}")
     };
     assert_eq!(
-        strip(walked),
-        strip(streamed),
+        strip(&walked),
+        strip(&streamed),
         "the analysis of the walk and of the stream"
     );
+    walked
+}
+
+/// The flight report of a log is made (plotters given no range it hangs or panics on), and
+/// its page holds every plot.
+fn report(log: &Log<'_>, analysis: ulog_runtime::analysis::Analysis) {
+    let report = ulog_runtime::report::Report::with_analysis(log, "fuzz.ulg", analysis)
+        .unwrap_or_else(|e| panic!("no report: {e}"));
+    assert_eq!(report.html().matches("<svg").count(), report.plots.len());
 }
 
 /// The whole-file reader, and everything built over it: rows and their values, topics,
@@ -57,7 +67,8 @@ pub fn whole_file(data: &[u8]) {
     let Ok(log) = Log::from_slice(data) else {
         return;
     };
-    analysis(&log, data);
+    let analysis = analysis(&log, data);
+    report(&log, analysis);
     for row in log.data() {
         let _ = row.value();
     }

@@ -311,7 +311,14 @@ impl Plots<'_> {
                 series.push(t.series("setpoint", &a[k]));
             }
             let title = format!("{} angle", capitalized(axis));
-            self.time(&format!("attitude_{axis}"), &title, "deg", series, &[], "")?;
+            self.time(
+                &format!("attitude_{axis}"),
+                &title,
+                "deg",
+                series,
+                &[],
+                "no finite angle in vehicle_attitude.q or its setpoint",
+            )?;
         }
         Ok(())
     }
@@ -352,7 +359,14 @@ impl Plots<'_> {
                 series.push(s.series("setpoint", &deg));
             }
             let title = format!("{} rate", capitalized(axis));
-            self.time(&format!("rate_{axis}"), &title, "deg/s", series, &[], "")?;
+            self.time(
+                &format!("rate_{axis}"),
+                &title,
+                "deg/s",
+                series,
+                &[],
+                "no finite rate measured or set",
+            )?;
         }
         Ok(())
     }
@@ -460,7 +474,11 @@ impl Plots<'_> {
             "",
             series,
             &[],
-            "the log has no vehicle_gps_position or sensor_gps rows",
+            if t.is_some() {
+                "no finite satellites_used, eph, epv or hdop"
+            } else {
+                "the log has no vehicle_gps_position or sensor_gps rows"
+            },
         )
     }
 
@@ -490,7 +508,7 @@ impl Plots<'_> {
             "m/s²",
             series,
             &levels,
-            "",
+            "no finite accel_vibration_metric",
         )
     }
 
@@ -575,6 +593,8 @@ impl Plots<'_> {
                 let (lat, lon) = (p.lat_deg.to_radians(), p.lon_deg.to_radians());
                 ((lon - lon0) * lat0.cos() * R, (lat - lat0) * R)
             })
+            // A latitude of 1e308° is finite and its metres are not.
+            .filter(|(x, y): &(f64, f64)| x.is_finite() && y.is_finite())
             .collect();
         let svg = plot::track_plot(
             "GPS track",
@@ -648,5 +668,139 @@ mod tests {
         let html = r.html();
         assert!(html.contains("&lt;b&gt;odd&lt;/b&gt; &amp; text"));
         assert!(!html.contains("<b>odd"));
+    }
+}
+
+/// The report of logs whose plotted values are any a `double` can hold.
+#[cfg(test)]
+mod extreme {
+    use super::*;
+
+    /// A log of the topics the report plots, every measured field a `double` taking the
+    /// extremes of the type in turn.
+    fn extreme_log(values: &[f64]) -> Vec<u8> {
+        let topics: &[(&str, &str)] = &[
+            (
+                "vehicle_local_position",
+                "double x;double y;double z;double vx;double vy;double vz;",
+            ),
+            ("vehicle_attitude", "double[4] q;"),
+            ("vehicle_attitude_setpoint", "double[4] q_d;"),
+            ("vehicle_angular_velocity", "double[3] xyz;"),
+            (
+                "vehicle_rates_setpoint",
+                "double roll;double pitch;double yaw;",
+            ),
+            ("actuator_outputs", "double[16] output;"),
+            (
+                "battery_status",
+                "double voltage_v;double current_a;double discharged_mah;",
+            ),
+            (
+                "vehicle_gps_position",
+                "double lat;double lon;double alt;double eph;double epv;double hdop;uint8_t fix_type;uint8_t satellites_used;",
+            ),
+            ("vehicle_imu_status", "double accel_vibration_metric;"),
+            (
+                "sensor_combined",
+                "double[3] gyro_rad;double[3] accelerometer_m_s2;",
+            ),
+        ];
+        let mut w = crate::Writer::new(Vec::new(), crate::WriterOptions::default()).unwrap();
+        w.format("vehicle_status:uint64_t timestamp;uint8_t nav_state;uint8_t arming_state;")
+            .unwrap();
+        for (name, fields) in topics {
+            w.format(&format!("{name}:uint64_t timestamp;{fields}"))
+                .unwrap();
+        }
+        let status = w.subscribe("vehicle_status", 0).unwrap();
+        let subs: Vec<_> = topics
+            .iter()
+            .map(|(name, _)| {
+                (
+                    w.subscribe(name, 0).unwrap(),
+                    w.schema()
+                        .resolved(w.schema().id(name).unwrap())
+                        .unwrap()
+                        .size,
+                )
+            })
+            .collect();
+        for i in 0..4000u64 {
+            let t = i * 1000;
+            let mut row = t.to_le_bytes().to_vec();
+            row.extend([(i / 500 % 20) as u8, 2]);
+            w.data(status, &row).unwrap();
+            for (k, (sub, size)) in subs.iter().enumerate() {
+                let mut row = t.to_le_bytes().to_vec();
+                let mut j = i as usize + k;
+                while row.len() + 8 <= *size {
+                    row.extend(values[j % values.len()].to_le_bytes());
+                    j += 1;
+                }
+                row.resize(*size, 3);
+                w.data(*sub, &row).unwrap();
+            }
+        }
+        w.into_inner()
+    }
+
+    /// Plotters loops for ever on an infinite axis, panics on a NaN one and overflows its
+    /// pixel arithmetic on a point far outside: a log's values must reach it as none of
+    /// those, whatever they are.
+    #[test]
+    fn a_log_of_extreme_values_gets_its_report() {
+        let cases: [&[f64]; 5] = [
+            &[f64::MAX, -f64::MAX, 0.0, f64::NAN, f64::INFINITY, 5e-324],
+            &[1e308, 1e308, 1e308],
+            &[5e-324, -5e-324],
+            &[1e300, 1e300 * (1.0 + f64::EPSILON)],
+            &[-1e200, 3e-200, 1e200, f64::NEG_INFINITY],
+        ];
+        for values in cases {
+            let log = Log::from_vec(extreme_log(values)).unwrap();
+            // A hang fails the test instead of stalling the suite.
+            let (tx, rx) = std::sync::mpsc::channel();
+            std::thread::spawn(move || {
+                let r = Report::of_log(&log, "x.ulg").map(|r| (r.html(), r));
+                let _ = tx.send(r.map_err(|e| e.to_string()));
+            });
+            let (html, r) = rx
+                .recv_timeout(std::time::Duration::from_secs(120))
+                .unwrap_or_else(|_| panic!("no report within 2 minutes for {values:?}"))
+                .unwrap_or_else(|e| panic!("{values:?}: {e}"));
+            let ids: Vec<&str> = r.plots.iter().map(|p| p.id.as_str()).collect();
+            for id in [
+                "modes",
+                "altitude",
+                "battery_voltage",
+                "gps",
+                "vibration",
+                "track",
+            ] {
+                assert!(ids.contains(&id), "{values:?}: no {id} plot: {ids:?}");
+            }
+            for p in &r.plots {
+                // Every plot but the mode timeline draws lines.
+                assert!(
+                    p.id == "modes" || p.svg.contains("<polyline"),
+                    "{values:?}: {} draws no line",
+                    p.id
+                );
+                assert!(
+                    !p.svg.contains("NaN") && !p.svg.contains("inf"),
+                    "{values:?}: {} has {}",
+                    p.id,
+                    p.svg
+                );
+            }
+            for (title, why) in &r.left_out {
+                assert!(
+                    !why.is_empty(),
+                    "{values:?}: {title} left out for no reason given"
+                );
+            }
+            assert_eq!(html.matches("<svg").count(), r.plots.len());
+        }
     }
 }

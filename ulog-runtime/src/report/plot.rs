@@ -56,17 +56,49 @@ fn err(e: impl std::fmt::Display) -> Error {
     e.to_string()
 }
 
-/// The range of values, widened a little (and made non-empty).
-fn padded(lo: f64, hi: f64) -> (f64, f64) {
-    if !lo.is_finite() || !hi.is_finite() {
+/// Values beyond this magnitude are drawn at a plot's edge: an axis ends within it, so its
+/// span, its padding and the ticks plotters steps along it stay finite numbers.
+const LIMIT: f64 = 1e300;
+
+/// The range of an axis for values from `lo` to `hi` (either infinite or NaN, or `lo`
+/// above `hi` when there are none): finite, widened by a twentieth of its span each side,
+/// and at least a millionth of a millionth of its magnitude wide, so that plotters' ticks
+/// step along it (plotters loops for ever on an infinite range, panics on a NaN one, and a
+/// range of a few units in the last place has no ticks to show).
+fn axis(lo: f64, hi: f64) -> (f64, f64) {
+    let (lo, hi) = (lo.clamp(-LIMIT, LIMIT), hi.clamp(-LIMIT, LIMIT));
+    // NaN, or no value at all.
+    if lo.is_nan() || hi.is_nan() || lo > hi {
         return (0.0, 1.0);
     }
+    let magnitude = lo.abs().max(hi.abs()).max(1.0);
     let span = hi - lo;
-    if span <= f64::EPSILON * lo.abs().max(1.0) {
-        let d = lo.abs().max(1.0) * 0.05;
+    if span < magnitude * 1e-12 {
+        let d = magnitude * 0.05;
         return (lo - d, hi + d);
     }
     (lo - span * 0.05, hi + span * 0.05)
+}
+
+/// The range of an axis as [`axis`] makes it, but exactly `lo..hi` when that is already a
+/// range plotters can draw (a frequency axis from 0 to its highest, say).
+fn exact_axis(lo: f64, hi: f64) -> (f64, f64) {
+    let magnitude = lo.abs().max(hi.abs()).max(1.0);
+    if lo >= -LIMIT && hi <= LIMIT && hi - lo >= magnitude * 1e-12 {
+        (lo, hi)
+    } else {
+        axis(lo, hi)
+    }
+}
+
+/// The range of a logarithmic axis for positive values from `lo` to `hi`: within
+/// `1/LIMIT..LIMIT`, widened a little, never empty.
+fn log_axis(lo: f64, hi: f64) -> (f64, f64) {
+    let (lo, hi) = (lo.clamp(1.0 / LIMIT, LIMIT), hi.clamp(1.0 / LIMIT, LIMIT));
+    if lo.is_nan() || hi.is_nan() || lo > hi {
+        return (1e-6, 1.0);
+    }
+    (lo * 0.8, hi * 1.25)
 }
 
 fn bounds(series: &[Series], axis: impl Fn(&(f64, f64)) -> f64) -> (f64, f64) {
@@ -91,8 +123,8 @@ pub(super) fn time_plot(
     let (y0, y1) = levels
         .iter()
         .fold((y0, y1), |(lo, hi), (v, _)| (lo.min(*v), hi.max(*v)));
-    let (y0, y1) = padded(y0, y1);
-    let (x0, x1) = padded(x0, x1);
+    let (y0, y1) = axis(y0, y1);
+    let (x0, x1) = axis(x0, x1);
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (WIDTH, HEIGHT)).into_drawing_area();
@@ -150,11 +182,16 @@ fn draw_lines<'a, DB: DrawingBackend + 'a>(
 where
     DB::ErrorType: 'static,
 {
+    // A point beyond the axes (a value past `LIMIT`) is drawn at their edge: plotters'
+    // pixel arithmetic overflows on one far outside.
+    let (x, y) = (chart.x_range(), chart.y_range());
     for (k, s) in series.iter().enumerate() {
         let color = COLORS[k % COLORS.len()];
         chart
             .draw_series(LineSeries::new(
-                s.points.iter().copied(),
+                s.points
+                    .iter()
+                    .map(|p| (p.0.clamp(x.start, x.end), p.1.clamp(y.start, y.end))),
                 color.stroke_width(1),
             ))
             .map_err(err)?
@@ -192,7 +229,8 @@ pub(super) fn xy_plot(
     series: &[Series],
     log_y: bool,
 ) -> Result<String, Error> {
-    let (x0, x1) = padded_raw(bounds(series, |p| p.0));
+    let (x0, x1) = bounds(series, |p| p.0);
+    let (x0, x1) = exact_axis(x0, x1);
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (WIDTH, HEIGHT)).into_drawing_area();
@@ -206,11 +244,7 @@ pub(super) fn xy_plot(
                 })
                 .collect();
             let (lo, hi) = bounds(&positive, |p| p.1);
-            let (lo, hi) = if lo.is_finite() && hi > lo {
-                (lo * 0.8, hi * 1.25)
-            } else {
-                (1e-6, 1.0)
-            };
+            let (lo, hi) = log_axis(lo, hi);
             let mut chart = caption_chart(&root, title)
                 .build_cartesian_2d(x0..x1, (lo..hi).log_scale())
                 .map_err(err)?;
@@ -225,7 +259,9 @@ pub(super) fn xy_plot(
                 let color = COLORS[k % COLORS.len()];
                 chart
                     .draw_series(LineSeries::new(
-                        s.points.iter().copied(),
+                        s.points
+                            .iter()
+                            .map(|p| (p.0.clamp(x0, x1), p.1.clamp(lo, hi))),
                         color.stroke_width(1),
                     ))
                     .map_err(err)?
@@ -236,7 +272,8 @@ pub(super) fn xy_plot(
             }
             legend(&mut chart, positive.len())?;
         } else {
-            let (y0, y1) = padded(bounds(series, |p| p.1).0, bounds(series, |p| p.1).1);
+            let (y0, y1) = bounds(series, |p| p.1);
+            let (y0, y1) = axis(y0, y1);
             let mut chart = caption_chart(&root, title)
                 .build_cartesian_2d(x0..x1, y0..y1)
                 .map_err(err)?;
@@ -254,14 +291,6 @@ pub(super) fn xy_plot(
     Ok(svg)
 }
 
-fn padded_raw((lo, hi): (f64, f64)) -> (f64, f64) {
-    if lo.is_finite() && hi > lo {
-        (lo, hi)
-    } else {
-        padded(lo, hi)
-    }
-}
-
 fn caption_chart<'a, 'b, DB: DrawingBackend>(
     root: &'a DrawingArea<DB, Shift>,
     title: &str,
@@ -277,10 +306,11 @@ fn caption_chart<'a, 'b, DB: DrawingBackend>(
 /// The track (east, north in m from its start), the same scale on both axes, each part
 /// colored by its flight mode.
 pub(super) fn track_plot(title: &str, parts: &[Series]) -> Result<String, Error> {
-    let (x0, x1) = bounds(parts, |p| p.0);
-    let (y0, y1) = bounds(parts, |p| p.1);
-    let span = (x1 - x0).max(y1 - y0).max(1.0) * 1.1;
-    let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+    // Both axes as wide as the wider one needs, about the track's middle.
+    let (x0, x1) = axis(bounds(parts, |p| p.0).0, bounds(parts, |p| p.0).1);
+    let (y0, y1) = axis(bounds(parts, |p| p.1).0, bounds(parts, |p| p.1).1);
+    let span = (x1 - x0).max(y1 - y0).max(1.0);
+    let (cx, cy) = (x0 / 2.0 + x1 / 2.0, y0 / 2.0 + y1 / 2.0);
     let side = 640;
     let mut svg = String::new();
     {
@@ -312,7 +342,7 @@ pub(super) fn track_plot(title: &str, parts: &[Series]) -> Result<String, Error>
 
 /// The flight modes as one bar over time.
 pub(super) fn mode_timeline(bands: &[Band], x0: f64, x1: f64) -> Result<String, Error> {
-    let (x0, x1) = if x1 > x0 { (x0, x1) } else { (x0, x0 + 1.0) };
+    let (x0, x1) = exact_axis(x0, x1);
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (WIDTH, 130)).into_drawing_area();
