@@ -4,6 +4,7 @@
 //! a time, in a loop over rows still in cache; or the statistics are taken from columns
 //! already made ([`ColumnStats`], what the Parquet conversion does with its own).
 
+use std::collections::HashMap;
 use std::sync::Arc;
 
 use super::FieldStat;
@@ -248,6 +249,9 @@ impl ColumnStats {
 #[derive(Debug, Clone, Default)]
 pub(super) struct FieldStats {
     accs: Vec<Acc>,
+    /// Each accumulator's index by topic, instance and format (a log of thousands of
+    /// subscriptions is looked up in it, not searched).
+    by_key: HashMap<(String, u8, String), usize>,
     /// Per subscription, when they are taken from a walk ([`RowVisitor`]): 0 until its first
     /// row, then its accumulator + 1, or [`NONE`].
     by_sub: Vec<u32>,
@@ -283,19 +287,26 @@ impl FieldStats {
     /// The accumulator of a subscription's rows (one per topic instance and format).
     pub(super) fn bind(&mut self, sub: &Subscription, schema: &Schema) -> Option<usize> {
         let spec = ColumnSpec::of(schema, sub.format()?)?;
-        if let Some(k) = self.accs.iter().position(|a| {
-            a.topic == sub.name && a.multi_id == sub.multi_id && a.format == spec.format()
-        }) {
+        let key = (sub.name.clone(), sub.multi_id, spec.format().to_owned());
+        if let Some(&k) = self.by_key.get(&key) {
             return Some(k);
         }
         let stage_rows = (STAGE_BYTES / spec.row_len().max(1)).clamp(1, 4096);
-        self.accs.push(Acc::new(
+        Some(self.push(Acc::new(
             &sub.name,
             sub.multi_id,
             Arc::new(spec),
             stage_rows,
-        ));
-        Some(self.accs.len() - 1)
+        )))
+    }
+
+    /// Adds an accumulator of a topic, instance and format not seen yet; gives its index.
+    fn push(&mut self, acc: Acc) -> usize {
+        let k = self.accs.len();
+        self.by_key
+            .insert((acc.topic.clone(), acc.multi_id, acc.format.clone()), k);
+        self.accs.push(acc);
+        k
     }
 
     /// Binds a subscription at its first row of a walk.
@@ -315,10 +326,11 @@ impl FieldStats {
     /// The statistics of columns taken apart ([`ColumnStats`]).
     #[cfg(feature = "parquet")]
     pub(crate) fn from_columns(stats: Vec<ColumnStats>) -> FieldStats {
-        FieldStats {
-            accs: stats.into_iter().map(|c| c.0).collect(),
-            by_sub: Vec::new(),
+        let mut fields = FieldStats::default();
+        for c in stats {
+            fields.push(c.0);
         }
+        fields
     }
 
     #[inline]
@@ -337,19 +349,18 @@ impl FieldStats {
     pub(super) fn merge(&mut self, mut other: FieldStats) {
         for mut theirs in other.accs.drain(..) {
             theirs.reduce();
-            let mine = self.accs.iter_mut().find(|a| {
-                a.topic == theirs.topic
-                    && a.multi_id == theirs.multi_id
-                    && a.format == theirs.format
-            });
-            match mine {
-                Some(mine) => {
+            let key = (theirs.topic.clone(), theirs.multi_id, theirs.format.clone());
+            match self.by_key.get(&key) {
+                Some(&k) => {
+                    let mine = &mut self.accs[k];
                     mine.reduce();
                     for (s, t) in mine.stats.iter_mut().zip(theirs.stats) {
                         s.merge(t);
                     }
                 }
-                None => self.accs.push(theirs),
+                None => {
+                    self.push(theirs);
+                }
             }
         }
     }
@@ -360,7 +371,9 @@ impl FieldStats {
         for a in &mut self.accs {
             a.reduce();
         }
-        let mut out = Vec::new();
+        let mut out: Vec<FieldStat> = Vec::new();
+        // Where each (topic, instance, field) is in `out`.
+        let mut at: HashMap<(&str, u8, &str), usize> = HashMap::new();
         let mut accs: Vec<&Acc> = self.accs.iter().collect();
         accs.sort_by(|a, b| (&a.topic, a.multi_id).cmp(&(&b.topic, b.multi_id)));
         for a in accs {
@@ -370,9 +383,9 @@ impl FieldStats {
                 }
                 let (min, max, mean, count) = s.finish();
                 // Several formats of one instance (a resubscription): merged by name.
-                if let Some(f) = out.iter_mut().find(|f: &&mut FieldStat| {
-                    f.topic == a.topic && f.multi_id == a.multi_id && f.field == *name
-                }) {
+                let key = (a.topic.as_str(), a.multi_id, name.as_str());
+                if let Some(&k) = at.get(&key) {
+                    let f = &mut out[k];
                     let total = f.count + count;
                     f.mean = (f.mean * f.count as f64 + mean * count as f64) / total as f64;
                     f.min = f.min.min(min);
@@ -380,6 +393,7 @@ impl FieldStats {
                     f.count = total;
                     continue;
                 }
+                at.insert(key, out.len());
                 out.push(FieldStat {
                     topic: a.topic.clone(),
                     multi_id: a.multi_id,
