@@ -8,7 +8,7 @@ use super::Report;
 /// Logged messages and parameter changes shown at most (the rest counted).
 const MAX_ROWS: usize = 2000;
 
-/// `text` with HTML's special characters escaped.
+/// `text` with HTML's special characters escaped and its control characters made visible.
 pub(super) fn escape(text: &str) -> String {
     let mut out = String::with_capacity(text.len());
     for c in text.chars() {
@@ -18,6 +18,14 @@ pub(super) fn escape(text: &str) -> String {
             '>' => out.push_str("&gt;"),
             '"' => out.push_str("&quot;"),
             '\'' => out.push_str("&#39;"),
+            // Control characters, which HTML does not allow in text (a NUL among them),
+            // shown as their pictures (␀, ␛...); the C1 ones as the replacement character.
+            '\t' | '\n' | '\r' => out.push(c),
+            c @ ('\0'..='\x1f') => {
+                out.push(char::from_u32(0x2400 + u32::from(c)).unwrap_or('\u{fffd}'))
+            }
+            '\x7f' => out.push('\u{2421}'),
+            '\u{80}'..='\u{9f}' => out.push('\u{fffd}'),
             c => out.push(c),
         }
     }
@@ -171,6 +179,10 @@ mod tests {
         assert_eq!(
             super::escape("<script>alert('x') & \"y\"</script>"),
             "&lt;script&gt;alert(&#39;x&#39;) &amp; &quot;y&quot;&lt;/script&gt;"
+        );
+        assert_eq!(
+            super::escape("a\0b\x1b[31mc\x7f\u{85}\td\n"),
+            "a\u{2400}b\u{241b}[31mc\u{2421}\u{fffd}\td\n"
         );
     }
 }

@@ -121,10 +121,24 @@ impl Report {
         p.track(&analysis)?;
         let meta = log.metadata();
         let mut facts = vec![("file".to_owned(), file_name.to_owned())];
-        for key in ["sys_name", "ver_hw", "ver_sw", "ver_sw_release", "sys_uuid"] {
+        for key in ["sys_name", "ver_hw", "ver_sw", "sys_uuid"] {
             if let Some(v) = meta.info_value(key) {
-                facts.push((key.to_owned(), v.to_string()));
+                // Text as it is, not quoted.
+                let text = v.as_str().map_or_else(|| v.to_string(), str::to_owned);
+                facts.push((key.to_owned(), text));
             }
+        }
+        // `ver_sw_release` as `ulog info` gives it.
+        match (meta.software_version(), meta.version_info()) {
+            (Some(v), _) => facts.push(("software".to_owned(), v)),
+            (None, Some(v)) => facts.push((
+                "software".to_owned(),
+                format!(
+                    "a development build (ver_sw_release {}.{}.{})",
+                    v.major, v.minor, v.patch
+                ),
+            )),
+            (None, None) => {}
         }
         if let Some(utc) = log.header().start_utc() {
             facts.push(("start (UTC)".to_owned(), utc.to_string()));
@@ -659,10 +673,25 @@ mod tests {
         assert_eq!(html.matches("<svg").count(), ids.len());
         // A log without those topics: nothing plotted, every plot said why.
         let mut w = crate::Writer::new(Vec::new(), crate::WriterOptions::default()).unwrap();
+        w.info("sys_name", &crate::Value::String("PX4".to_owned()))
+            .unwrap();
+        // v1.15.1, a release.
+        w.info(
+            "ver_sw_release",
+            &crate::Value::Scalar(crate::value::Scalar::UInt32(0x010f_01ff)),
+        )
+        .unwrap();
         w.log(crate::LogLevel::Info, 1, "<b>odd</b> & text")
             .unwrap();
         let empty = Log::from_vec(w.into_inner()).unwrap();
         let r = Report::of_log(&empty, "empty.ulg").unwrap();
+        assert_eq!(
+            r.facts[1..],
+            [
+                ("sys_name".to_owned(), "PX4".to_owned()),
+                ("software".to_owned(), "v1.15.1".to_owned())
+            ]
+        );
         assert!(r.plots.is_empty());
         assert_eq!(r.left_out.len(), 17);
         let html = r.html();
