@@ -159,6 +159,42 @@ pub fn file_name(prefix: &str, name: &str, suffix: &str) -> String {
     format!("{prefix}{}{tag}{suffix}", &part[..room.min(part.len())])
 }
 
+/// Where the file at `path` is written before it is complete: `.partial` after its name (a
+/// reader globbing `*.parquet` never sees a half-written one). A name that would pass
+/// [`MAX_FILE_NAME`] bytes with it is cut and tagged with a hash of the whole name, as
+/// [`file_name`] shortens, so that a name the file system takes always has a partial one it
+/// takes too.
+///
+/// ```
+/// use std::path::Path;
+/// use ulog_runtime::file_names::{partial_path, MAX_FILE_NAME};
+/// assert_eq!(partial_path(Path::new("out/gps_0.parquet")), Path::new("out/gps_0.parquet.partial"));
+/// let long = format!("{}.parquet", "x".repeat(240));
+/// let partial = partial_path(Path::new(&long));
+/// let name = partial.file_name().unwrap().to_str().unwrap();
+/// assert_eq!(name.len(), MAX_FILE_NAME);
+/// assert!(name.starts_with("xxx") && name.ends_with(".partial"));
+/// ```
+pub fn partial_path(path: &std::path::Path) -> std::path::PathBuf {
+    const SUFFIX: &str = ".partial";
+    let name = path.file_name().unwrap_or_default();
+    match name.to_str() {
+        Some(name) if name.len() + SUFFIX.len() > MAX_FILE_NAME => {
+            let tag = format!("~{:016x}", fnv1a(name));
+            let mut cut = MAX_FILE_NAME - SUFFIX.len() - tag.len();
+            while !name.is_char_boundary(cut) {
+                cut -= 1;
+            }
+            path.with_file_name(format!("{}{tag}{SUFFIX}", &name[..cut]))
+        }
+        _ => {
+            let mut name = name.to_os_string();
+            name.push(SUFFIX);
+            path.with_file_name(name)
+        }
+    }
+}
+
 /// The `n`-th choice of a file name for `name`: [`file_name`] for 1, then with `~n` before
 /// the extension (the last `.` of `suffix`): what [`FileNames::unique`] tries in turn, for
 /// callers that must look at each choice themselves (whether a folder of that name already

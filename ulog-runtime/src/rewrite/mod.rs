@@ -610,9 +610,7 @@ impl Rewrite {
         // Read as it is: the stream reader reads in chunks of its own.
         let file = std::fs::File::open(input).map_err(|e| RewriteError::Read(e.into()))?;
         crate::file_names::prepare_file(output).map_err(out_error)?;
-        let mut partial = output.as_os_str().to_owned();
-        partial.push(".partial");
-        let partial = std::path::PathBuf::from(partial);
+        let partial = crate::file_names::partial_path(output);
         let out = std::fs::File::create(&partial).map_err(out_error)?;
         let result =
             self.run(file, out)

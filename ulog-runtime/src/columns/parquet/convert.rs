@@ -791,7 +791,7 @@ impl<'c> Pass<'c> {
                 path.display()
             ));
         }
-        let partial = partial_path(&path);
+        let partial = crate::file_names::partial_path(&path);
         // Removed if the conversion fails (if it was made at all).
         self.outputs.paths.push(partial.clone());
         let options = &converter.options;
@@ -938,7 +938,7 @@ impl<'c> Pass<'c> {
                 })
                 .collect(),
         };
-        let metadata_partial = partial_path(&metadata);
+        let metadata_partial = crate::file_names::partial_path(&metadata);
         self.outputs.paths.push(metadata_partial.clone());
         write_json(&metadata_partial, &document)?;
         renames.push((metadata_partial, metadata.clone()));
@@ -1046,14 +1046,6 @@ fn earlier_files(root: &Path, metadata: &Path) -> Vec<PathBuf> {
         })
         .map(|p| root.join(p))
         .collect()
-}
-
-/// Where a file is written before it is complete: a reader globbing `*.parquet` never sees
-/// a half-written one.
-fn partial_path(path: &Path) -> PathBuf {
-    let mut name = path.file_name().unwrap_or_default().to_os_string();
-    name.push(".partial");
-    path.with_file_name(name)
 }
 
 /// `metadata.json`: the log's identity, its facts, and the files written.

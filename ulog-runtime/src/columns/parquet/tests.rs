@@ -776,6 +776,21 @@ fn no_name_from_a_log_writes_outside_the_output_folder() {
         msg_id: 1,
         data: &[2, 0, 0, 0, 0, 0, 0, 0, 8],
     });
+    // A name whose file name is shortened to the longest one file systems take: its
+    // `.partial` name too (it was not, and the whole log failed).
+    let long = "l".repeat(250);
+    put(Message::Format(
+        format!("{long}:uint64_t timestamp;uint8_t x;").as_bytes(),
+    ));
+    put(Message::Subscribe {
+        multi_id: 0,
+        msg_id: 2,
+        name: long.as_bytes(),
+    });
+    put(Message::Data {
+        msg_id: 2,
+        data: &[3, 0, 0, 0, 0, 0, 0, 0, 7],
+    });
     for layout in [Layout::PerLog, Layout::Hive] {
         let root = temp("names");
         let options = ParquetOptions {
@@ -785,9 +800,10 @@ fn no_name_from_a_log_writes_outside_the_output_folder() {
         let conv = Converter::new(root.join("out"), options)
             .convert_reader(&bytes[..], "../x.ulg")
             .unwrap();
-        assert_eq!(conv.files.len(), 2);
+        assert_eq!(conv.files.len(), 3);
         for f in &conv.files {
             assert!(f.path.starts_with(root.join("out")), "{}", f.path.display());
+            assert!(f.path.file_name().unwrap().len() <= crate::file_names::MAX_FILE_NAME);
             let rel = f.path.strip_prefix(root.join("out")).unwrap();
             assert!(
                 rel.components()
