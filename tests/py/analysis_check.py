@@ -151,9 +151,11 @@ def check_motion(stats, data, checks):
                 checks.same("avg_speed_m_s", stats["avg_speed_m_s"], s.mean())
     att = data("vehicle_attitude")
     if att is not None and "q[1]" in att:
-        q1, q2 = finite(att["q[1]"]), finite(att["q[2]"])
-        if len(q1) == len(att["q[1]"]) and len(q1) > 0:
-            tilt = np.degrees(np.arccos(np.clip(1 - 2 * (q1 ** 2 + q2 ** 2), -1, 1)))
+        q = rows_finite(att["q[0]"], att["q[1]"], att["q[2]"], att["q[3]"])
+        norm2 = (q ** 2).sum(axis=0)
+        q = q[:, norm2 > 0]
+        if q.shape[1] == len(att["q[1]"]) and q.shape[1] > 0:
+            tilt = np.degrees(np.arccos(np.clip(1 - 2 * (q[1] ** 2 + q[2] ** 2) / (q ** 2).sum(axis=0), -1, 1)))
             checks.same("max_tilt_deg", stats["max_tilt_deg"], tilt.max())
     rates = data("vehicle_angular_velocity")
     if rates is not None and "xyz[0]" in rates:

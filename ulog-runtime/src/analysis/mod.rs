@@ -147,7 +147,9 @@ pub struct Motion {
     pub max_speed_down_m_s: Option<f64>,
     /// Mean 3-D speed, m/s.
     pub avg_speed_m_s: Option<f64>,
-    /// Largest tilt from level, degrees.
+    /// Largest tilt from level, degrees: `acos(1 - 2 (q1² + q2²) / |q|²)` of
+    /// `vehicle_attitude.q` (a quaternion not of unit length stands for the rotation of the
+    /// unit one along it; an all-zero one is skipped).
     pub max_tilt_deg: Option<f64>,
     /// Largest rotation rate, deg/s.
     pub max_rotation_speed_deg_s: Option<f64>,

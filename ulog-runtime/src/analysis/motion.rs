@@ -196,12 +196,20 @@ impl MotionStats {
             }
             Fields::Attitude { q } => {
                 self.seen_attitude = true;
-                let (Some(q1), Some(q2)) = (q[1].f64(data), q[2].f64(data)) else {
+                let (Some(q0), Some(q1), Some(q2), Some(q3)) = (
+                    q[0].f64(data),
+                    q[1].f64(data),
+                    q[2].f64(data),
+                    q[3].f64(data),
+                ) else {
                     return;
                 };
-                // The cosine of the angle between the body's z axis and the vertical.
-                let cos = (1.0 - 2.0 * (q1 * q1 + q2 * q2)).clamp(-1.0, 1.0);
-                if cos.is_finite() {
+                // The cosine of the angle between the body's z axis and the vertical, of the
+                // rotation the quaternion stands for at any length (an all-zero one stands
+                // for none).
+                let norm2 = q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3;
+                let cos = (1.0 - 2.0 * (q1 * q1 + q2 * q2) / norm2).clamp(-1.0, 1.0);
+                if norm2 > 0.0 && cos.is_finite() {
                     for a in accs.iter_mut() {
                         a.min_cos_tilt = Some(a.min_cos_tilt.map_or(cos, |c| c.min(cos)));
                     }

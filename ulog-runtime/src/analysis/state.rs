@@ -78,7 +78,11 @@ impl FlightState {
                 self.status_seen = true;
                 #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
                 if let Some(n) = get(nav_state) {
-                    self.nav_state = Some(n as u8);
+                    // A value no `uint8_t` holds (NaN, 2.5, -1 of a crafted log's float or
+                    // wider field) as 255, a mode PX4 does not have ("Unknown"), not
+                    // rounded or saturated into a real one (NaN would be 0, "Manual").
+                    let whole = n.fract() == 0.0 && (0.0..=255.0).contains(&n);
+                    self.nav_state = Some(if whole { n as u8 } else { u8::MAX });
                 }
                 if let Some(a) = get(arming_state) {
                     let armed = a == ARMED;

@@ -797,3 +797,58 @@ fn without_defaults_the_non_default_parameters_are_unknown_not_none() {
     assert!(text.contains("\nNon-default parameters: -\n"), "{text}");
     assert!(text.contains("non_default_params"), "{text}");
 }
+
+/// The tilt of a quaternion not of unit length is that of the rotation it stands for; an
+/// all-zero one stands for none.
+#[test]
+fn a_quaternion_of_any_length_gives_its_rotations_tilt() {
+    let tilt = |qs: &[[f32; 4]]| {
+        let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+        let att = w.topic::<VehicleAttitude>(0).unwrap();
+        for (i, q) in qs.iter().enumerate() {
+            let timestamp = i as u64 * 1_000 + 1;
+            w.write(&att, &VehicleAttitude { timestamp, q: *q })
+                .unwrap();
+        }
+        let bytes = w.into_inner();
+        let a = Analysis::of_log(&Log::from_slice(&bytes).unwrap());
+        assert_eq!(a, Analysis::of_reader(&bytes[..]).unwrap());
+        a.stats.all.max_tilt_deg
+    };
+    let close = |t: Option<f64>, deg: f64| t.is_some_and(|t| (t - deg).abs() < 1e-4);
+    // (1, 1, 1, 1) is (0.5, 0.5, 0.5, 0.5): a tilt of 90°, not the 180° of taking it as a
+    // unit quaternion.
+    assert!(close(tilt(&[[1.0; 4]]), 90.0), "{:?}", tilt(&[[1.0; 4]]));
+    assert!(close(tilt(&[[0.5; 4]]), 90.0));
+    // 30° of roll at twice the length.
+    let (s, c) = (15f32.to_radians().sin(), 15f32.to_radians().cos());
+    assert!(close(tilt(&[[2.0 * c, 2.0 * s, 0.0, 0.0]]), 30.0));
+    // An all-zero quaternion says nothing: no tilt, not 0°.
+    assert_eq!(tilt(&[[0.0; 4]]), None);
+    assert!(close(tilt(&[[0.0; 4], [1.0, 0.0, 0.0, 0.0]]), 0.0));
+}
+
+/// A `nav_state` no `uint8_t` holds (a crafted log's `float` field) is a mode PX4 does not
+/// have, not the one a cast would make of it (NaN as 0, "Manual").
+#[test]
+fn a_nav_state_that_is_not_a_byte_is_an_unknown_mode() {
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    w.format("vehicle_status:uint64_t timestamp;float nav_state;uint8_t arming_state;")
+        .unwrap();
+    let status = w.subscribe("vehicle_status", 0).unwrap();
+    for (t, nav) in [
+        (1_000u64, f32::NAN),
+        (2_000, 2.5),
+        (3_000, -1.0),
+        (4_000, 3.0),
+    ] {
+        let mut row = t.to_le_bytes().to_vec();
+        row.extend(nav.to_le_bytes());
+        row.push(2);
+        w.data(status, &row).unwrap();
+    }
+    let bytes = w.into_inner();
+    let a = Analysis::of_log(&Log::from_slice(&bytes).unwrap());
+    let names: Vec<&str> = a.flight_modes.iter().map(|m| m.mode.as_str()).collect();
+    assert_eq!(names, ["Unknown", "Mission"]);
+}
