@@ -17,6 +17,12 @@ use crate::schema::{Primitive, Schema};
 /// Bytes of rows staged before they are reduced.
 const STAGE_BYTES: usize = 32 << 10;
 
+/// Most fields counted, all instances together: each costs about 400 bytes from its first
+/// row to the end (its statistics, its name, its place in the output), so a log of formats
+/// defining very wide topics (`uint8_t[65000]`, 65,000 fields in a 30-byte definition) in
+/// many instances is bounded. PX4's logs have a few thousand numeric fields in all.
+pub(crate) const MAX_FIELDS: usize = 250_000;
+
 /// Running statistics of one field, kept in the field's own kind of number: integers'
 /// bounds as integers and their sum exact (every integer is finite), floats' bounds and sum
 /// over their finite values.
@@ -252,6 +258,12 @@ pub(super) struct FieldStats {
     /// Each accumulator's index by topic, instance and format (a log of thousands of
     /// subscriptions is looked up in it, not searched).
     by_key: HashMap<(String, u8, String), usize>,
+    /// The columns of each format bound (`None`: it has none to count).
+    specs: HashMap<crate::schema::FormatId, Option<Arc<ColumnSpec>>>,
+    /// The fields of the accumulators, all together ([`MAX_FIELDS`]).
+    fields: usize,
+    /// The topic instances left out for their fields: `` `topic` #m (n columns) ``.
+    too_wide: Vec<String>,
     /// Per subscription, when they are taken from a walk ([`RowVisitor`]): 0 until its first
     /// row, then its accumulator + 1, or [`NONE`].
     by_sub: Vec<u32>,
@@ -286,23 +298,36 @@ impl RowVisitor for FieldStats {
 impl FieldStats {
     /// The accumulator of a subscription's rows (one per topic instance and format).
     pub(super) fn bind(&mut self, sub: &Subscription, schema: &Schema) -> Option<usize> {
-        let spec = ColumnSpec::of(schema, sub.format()?)?;
+        let id = sub.format()?;
+        // Made once per format, not once per instance.
+        let spec = match self.specs.get(&id) {
+            Some(spec) => spec.clone()?,
+            None => {
+                let spec = ColumnSpec::of(schema, id).map(Arc::new);
+                self.specs.insert(id, spec.clone());
+                spec?
+            }
+        };
         let key = (sub.name.clone(), sub.multi_id, spec.format().to_owned());
         if let Some(&k) = self.by_key.get(&key) {
             return Some(k);
         }
+        let columns = spec.columns().len();
+        if self.fields.saturating_add(columns) > MAX_FIELDS {
+            self.too_wide.push(format!(
+                "`{}` #{} ({columns} columns)",
+                sub.name, sub.multi_id
+            ));
+            return None;
+        }
         let stage_rows = (STAGE_BYTES / spec.row_len().max(1)).clamp(1, 4096);
-        Some(self.push(Acc::new(
-            &sub.name,
-            sub.multi_id,
-            Arc::new(spec),
-            stage_rows,
-        )))
+        Some(self.push(Acc::new(&sub.name, sub.multi_id, spec, stage_rows)))
     }
 
     /// Adds an accumulator of a topic, instance and format not seen yet; gives its index.
     fn push(&mut self, acc: Acc) -> usize {
         let k = self.accs.len();
+        self.fields += acc.leaves.len();
         self.by_key
             .insert((acc.topic.clone(), acc.multi_id, acc.format.clone()), k);
         self.accs.push(acc);
@@ -347,6 +372,7 @@ impl FieldStats {
 
     /// Takes in the statistics of another part of the rows.
     pub(super) fn merge(&mut self, mut other: FieldStats) {
+        self.too_wide.append(&mut other.too_wide);
         for mut theirs in other.accs.drain(..) {
             theirs.reduce();
             let key = (theirs.topic.clone(), theirs.multi_id, theirs.format.clone());
@@ -366,8 +392,24 @@ impl FieldStats {
     }
 
     /// The statistics of every counted field with a finite value, by topic, instance and
-    /// field order.
-    pub(super) fn finish(mut self) -> Vec<FieldStat> {
+    /// field order; the instances left out for [`MAX_FIELDS`] said in `missing`.
+    pub(super) fn finish(mut self, missing: &mut Vec<super::Missing>) -> Vec<FieldStat> {
+        if !self.too_wide.is_empty() {
+            let shown = self.too_wide.len().min(5);
+            let more = match self.too_wide.len() - shown {
+                0 => String::new(),
+                n => format!(" and {n} more"),
+            };
+            missing.push(super::Missing {
+                fact: "field_stats".to_owned(),
+                reason: format!(
+                    "{} topic instances left out, their columns past the limit of {MAX_FIELDS} \
+                     field statistics: {}{more}",
+                    self.too_wide.len(),
+                    self.too_wide[..shown].join(", ")
+                ),
+            });
+        }
         for a in &mut self.accs {
             a.reduce();
         }

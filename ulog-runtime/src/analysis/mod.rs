@@ -374,6 +374,13 @@ pub struct Analyzer {
     /// Per subscription: 0 until its route is made, then 1 + whether any consumer takes
     /// its rows (one byte to look at for the rows no consumer wants).
     wanted: Vec<u8>,
+    /// The field index of each format a route was made for: the instances of a format
+    /// share it (made once, not once per instance: a format of 65,000 fields in 256
+    /// instances took seconds).
+    indexes: std::collections::HashMap<
+        crate::schema::FormatId,
+        std::sync::Arc<crate::columns::FieldIndex>,
+    >,
     /// Bytes the reader skipped as damaged.
     damaged_bytes: u64,
     /// Whether the initial parameters were read (at the first row).
@@ -556,9 +563,14 @@ impl Analyzer {
     }
 
     fn route(&mut self, sub: &Subscription, schema: &crate::schema::Schema) -> Route {
-        let index = sub
-            .format()
-            .and_then(|id| crate::columns::FieldIndex::of(schema, id));
+        let index = sub.format().and_then(|id| match self.indexes.get(&id) {
+            Some(index) => Some(index.clone()),
+            None => {
+                let index = std::sync::Arc::new(crate::columns::FieldIndex::of(schema, id)?);
+                self.indexes.insert(id, index.clone());
+                Some(index)
+            }
+        });
         let Some(index) = index else {
             return Route {
                 state: None,
@@ -637,7 +649,7 @@ impl Analyzer {
             a.spectra = self.spectra.finish(&mut missing);
         }
         if self.parts.fields {
-            a.field_stats = self.fields.finish();
+            a.field_stats = self.fields.finish(&mut missing);
         }
         a.missing = missing;
         a

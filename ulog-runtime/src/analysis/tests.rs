@@ -852,3 +852,31 @@ fn a_nav_state_that_is_not_a_byte_is_an_unknown_mode() {
     let names: Vec<&str> = a.flight_modes.iter().map(|m| m.mode.as_str()).collect();
     assert_eq!(names, ["Unknown", "Mission"]);
 }
+
+/// Field statistics stop at `MAX_FIELDS` fields, the instances past it said in `missing`:
+/// a 30-byte definition (`uint8_t[65000]`) in many instances cannot take gigabytes.
+#[test]
+fn field_statistics_past_their_limit_are_said_missing() {
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    w.format("big:uint64_t timestamp;uint8_t[65000] a;")
+        .unwrap();
+    let subs: Vec<_> = (0..4).map(|m| w.subscribe("big", m).unwrap()).collect();
+    for (m, sub) in subs.iter().enumerate() {
+        let mut row = 1_000u64.to_le_bytes().to_vec();
+        row.resize(8 + 65_000, m as u8);
+        w.data(*sub, &row).unwrap();
+    }
+    let bytes = w.into_inner();
+    let a = Analysis::of_log(&Log::from_slice(&bytes).unwrap());
+    // Three instances of 65,000 fields fit in 250,000; the fourth does not.
+    assert_eq!(a.field_stats.len(), 3 * 65_000);
+    assert!(a.field_stats.iter().all(|f| f.multi_id < 3));
+    let said = a.missing.iter().find(|m| m.fact == "field_stats").unwrap();
+    assert!(
+        said.reason
+            .starts_with("1 topic instances left out, their columns past the limit of 250000")
+            && said.reason.contains("`big` #3 (65001 columns)"),
+        "{}",
+        said.reason
+    );
+}

@@ -11,7 +11,7 @@ use crate::columns::parquet::{Converter, Layout, ParquetOptions};
 use crate::cli::Failure;
 
 /// `ulog parquet FILE... -o DIR [-m a,b] [--start S --end S] [--layout hive] [-j N]
-/// [--no-analysis] [--buffer-mb N]`.
+/// [--no-analysis] [--buffer-mb N] [--max-columns N]`.
 #[derive(clap::Args)]
 pub(crate) struct Args {
     /// The logs.
@@ -47,6 +47,10 @@ pub(crate) struct Args {
     /// groups).
     #[arg(long, default_value_t = 16, value_parser = at_least_one)]
     buffer_mb: usize,
+    /// Most columns of one log's tables open at once (each costs about 1 to 4 KiB until
+    /// its file closes): a topic instance past it is left out, with a note.
+    #[arg(long, default_value_t = 100_000, value_parser = at_least_one)]
+    max_columns: usize,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -68,6 +72,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         },
         analysis: !args.no_analysis,
         buffer_bytes: args.buffer_mb.saturating_mul(1 << 20),
+        max_columns: args.max_columns,
         ..ParquetOptions::default()
     };
     // Refused here rather than once per log.

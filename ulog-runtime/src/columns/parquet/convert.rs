@@ -5,6 +5,7 @@
 //! encoder's threads from copies of what was read (or as it is read, with no encoder
 //! thread); the tables' footers and `metadata.json` are written once the digest is known.
 
+use std::collections::HashMap;
 use std::fs::File;
 use std::io::{self, Read};
 use std::path::{Path, PathBuf};
@@ -555,6 +556,14 @@ struct Pass<'c> {
     by_sub: Vec<(u32, u32)>,
     summaries: Vec<Summary>,
     instances: Vec<Instance>,
+    /// Each instance's index by topic and `multi_id`.
+    instance_index: HashMap<(String, u8), usize>,
+    /// The columns of each format an instance was bound to (`None`: it has none).
+    specs: HashMap<crate::schema::FormatId, Option<Arc<ColumnSpec>>>,
+    /// The columns of the tables open ([`ParquetOptions::max_columns`]).
+    columns: usize,
+    /// The topic instances left out for their columns: `` `topic` #m (n columns) ``.
+    too_wide: Vec<String>,
     logged: Vec<LoggedMessage>,
     changes: Vec<ParameterChange>,
     dropouts: Vec<Dropout>,
@@ -589,6 +598,10 @@ impl<'c> Pass<'c> {
             by_sub: Vec::new(),
             summaries: Vec::new(),
             instances: Vec::new(),
+            instance_index: HashMap::new(),
+            specs: HashMap::new(),
+            columns: 0,
+            too_wide: Vec::new(),
             logged: Vec::new(),
             changes: Vec::new(),
             dropouts: Vec::new(),
@@ -760,23 +773,38 @@ impl<'c> Pass<'c> {
         if !self.converter.options.wants(&sub.name) {
             return (s, LEFT_OUT);
         }
-        if let Some(k) = self
-            .instances
-            .iter()
-            .position(|x| x.topic == sub.name && x.multi_id == sub.multi_id)
-        {
+        let key = (sub.name.clone(), sub.multi_id);
+        if let Some(&k) = self.instance_index.get(&key) {
             return (s, k as u32 + 1);
         }
-        let Some(spec) = sub.format().and_then(|id| ColumnSpec::of(row.schema(), id)) else {
+        // Made once per format, not once per instance.
+        let spec = sub.format().and_then(|id| {
+            self.specs
+                .entry(id)
+                .or_insert_with(|| ColumnSpec::of(row.schema(), id).map(Arc::new))
+                .clone()
+        });
+        let Some(spec) = spec else {
             return (s, LEFT_OUT);
         };
+        let (open, limit) = (self.columns, self.converter.options.max_columns);
+        let columns = spec.columns().len();
+        if open.saturating_add(columns) > limit {
+            self.too_wide.push(format!(
+                "`{}` #{} ({columns} columns)",
+                sub.name, sub.multi_id
+            ));
+            return (s, LEFT_OUT);
+        }
+        self.columns += columns;
         let instance = self.instance(spec, &sub.name, sub.multi_id);
+        self.instance_index.insert(key, self.instances.len());
         self.instances.push(instance);
         (s, self.instances.len() as u32)
     }
 
     /// A new instance: its file's name (the file is made with its first row group).
-    fn instance(&mut self, spec: ColumnSpec, topic: &str, multi_id: u8) -> Instance {
+    fn instance(&mut self, spec: Arc<ColumnSpec>, topic: &str, multi_id: u8) -> Instance {
         let converter = self.converter;
         let (place, collided) = converter.options.layout.table_place(
             &mut self.names,
@@ -802,7 +830,6 @@ impl<'c> Pass<'c> {
             Reopening::new(partial.clone()),
             options,
         );
-        let spec = Arc::new(spec);
         let batch_rows = options
             .batch_rows(spec.stored_row_size())
             .min(options.row_group_rows.max(1));
@@ -836,6 +863,21 @@ impl<'c> Pass<'c> {
         bytes: u64,
         threads: usize,
     ) -> Result<Conversion, ConvertError> {
+        if !self.too_wide.is_empty() {
+            let shown = self.too_wide.len().min(5);
+            let more = match self.too_wide.len() - shown {
+                0 => String::new(),
+                n => format!(" and {n} more"),
+            };
+            self.notes.push(format!(
+                "{} topic instances left out, their columns past the limit of {} open at \
+                 once (--max-columns, ParquetOptions::max_columns): {}{more}; their rows are \
+                 in no file and in no field statistics",
+                self.too_wide.len(),
+                self.converter.options.max_columns,
+                self.too_wide[..shown].join(", ")
+            ));
+        }
         let root = self.converter.root.clone();
         let (log_dir, moved) = self.converter.claim_log_dir(&self.stem, &identity.sha256)?;
         if moved {

@@ -104,6 +104,15 @@ pub struct ParquetOptions {
     /// uses every core; [`Converter::convert_files`] of several logs at once, one thread a
     /// log.
     pub encoders: Option<usize>,
+    /// Most columns of one log's tables open at once. Every column of a table open costs
+    /// parquet-rs and Arrow about 1 to 4 KiB until the file closes (its schema, its writer,
+    /// its footer's metadata), whatever its rows: a log whose formats define very wide
+    /// topics (`uint8_t[65000]`, a 30-byte definition, is 65,000 columns) in many instances
+    /// took gigabytes for a few megabytes of rows. A topic instance whose columns would pass
+    /// the limit is left out with a note ([`Conversion::notes`]) saying so (its rows are in
+    /// no file, and in no field statistics of the analysis); the other tables are written.
+    /// PX4's logs hold a few thousand columns in all. Default 100,000.
+    pub max_columns: usize,
 }
 
 impl Default for ParquetOptions {
@@ -120,6 +129,7 @@ impl Default for ParquetOptions {
             layout: Layout::PerLog,
             analysis: true,
             encoders: None,
+            max_columns: 100_000,
         }
     }
 }

@@ -1878,3 +1878,39 @@ fn delta_pages_of_any_length_read_back() {
         }
     }
 }
+
+/// A topic instance whose columns would pass `max_columns` open at once is left out with a
+/// note; the others are written as ever.
+#[test]
+fn an_instance_past_the_column_limit_is_left_out_and_said() {
+    let bytes = log_bytes_with(10, |_, _| {});
+    let root = temp("max-columns");
+    // battery #0 and #1 (5 columns each) fit in 11; gyro's 2 more would not.
+    let options = ParquetOptions {
+        max_columns: 11,
+        ..ParquetOptions::default()
+    };
+    let conv = Converter::new(&root, options)
+        .convert_reader(&bytes[..], "wide.ulg")
+        .unwrap();
+    let written: Vec<(&str, u8)> = conv
+        .files
+        .iter()
+        .map(|f| (f.topic.as_str(), f.multi_id))
+        .collect();
+    assert_eq!(written, [("battery", 0), ("battery", 1)]);
+    assert!(
+        conv.notes.iter().any(|n| n.starts_with(
+            "1 topic instances left out, their columns past the limit of 11 open at once"
+        ) && n.contains("`sensors/gyro` #0 (2 columns)")),
+        "{:?}",
+        conv.notes
+    );
+    // The default takes them all.
+    let conv = Converter::new(&root, ParquetOptions::default())
+        .convert_reader(&bytes[..], "wide.ulg")
+        .unwrap();
+    assert_eq!(conv.files.len(), 3);
+    assert!(conv.notes.is_empty(), "{:?}", conv.notes);
+    std::fs::remove_dir_all(&root).unwrap();
+}
