@@ -69,7 +69,10 @@ pub enum Target {
 ///
 /// Not changed, and still hinting at a place: the geoid separation (ellipsoid minus MSL
 /// altitude), magnetic field values, barometric pressure, the local positions (meters
-/// from the reference) and what other writers store under names outside these rules.
+/// from the reference), coordinates written as text in logged messages (`Home: lat
+/// 47.3977419 lon 8.5455938`: a number in text is not known to be a coordinate; dates,
+/// times, paths, GUIDs and addresses in text are zeroed) and what other writers store
+/// under names outside these rules.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Anonymize {
     /// Where positions go.
