@@ -151,10 +151,10 @@ def check_motion(stats, data, checks):
                 checks.same("avg_speed_m_s", stats["avg_speed_m_s"], s.mean())
     att = data("vehicle_attitude")
     if att is not None and "q[1]" in att:
+        # Rows with a finite, non-zero quaternion, each normalised by its length.
         q = rows_finite(att["q[0]"], att["q[1]"], att["q[2]"], att["q[3]"])
-        norm2 = (q ** 2).sum(axis=0)
-        q = q[:, norm2 > 0]
-        if q.shape[1] == len(att["q[1]"]) and q.shape[1] > 0:
+        q = q[:, (q ** 2).sum(axis=0) > 0]
+        if q.shape[1] > 0:
             tilt = np.degrees(np.arccos(np.clip(1 - 2 * (q[1] ** 2 + q[2] ** 2) / (q ** 2).sum(axis=0), -1, 1)))
             checks.same("max_tilt_deg", stats["max_tilt_deg"], tilt.max())
     rates = data("vehicle_angular_velocity")

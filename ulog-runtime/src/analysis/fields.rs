@@ -17,10 +17,12 @@ use crate::schema::{Primitive, Schema};
 /// Bytes of rows staged before they are reduced.
 const STAGE_BYTES: usize = 32 << 10;
 
-/// Most fields counted, all instances together: each costs about 400 bytes from its first
-/// row to the end (its statistics, its name, its place in the output), so a log of formats
-/// defining very wide topics (`uint8_t[65000]`, 65,000 fields in a 30-byte definition) in
-/// many instances is bounded. PX4's logs have a few thousand numeric fields in all.
+/// Most columns of the formats whose field statistics are taken, all instances together
+/// (counted before any is made): each costs about 400 bytes from its first row to the end
+/// (its statistics, its name, its place in the output), so a log of formats defining very
+/// wide topics (`uint8_t[65000]`, 65,000 columns in a 30-byte definition) in many instances
+/// is bounded. PX4's logs have a few thousand columns in all. One walk's budget: the walks
+/// of the field statistics are never split in parts, so `merge` does not check it.
 pub(crate) const MAX_FIELDS: usize = 250_000;
 
 /// Running statistics of one field, kept in the field's own kind of number: integers'
@@ -260,10 +262,12 @@ pub(super) struct FieldStats {
     by_key: HashMap<(String, u8, String), usize>,
     /// The columns of each format bound (`None`: it has none to count).
     specs: HashMap<crate::schema::FormatId, Option<Arc<ColumnSpec>>>,
-    /// The fields of the accumulators, all together ([`MAX_FIELDS`]).
+    /// The columns of the formats bound, all together ([`MAX_FIELDS`]).
     fields: usize,
-    /// The topic instances left out for their fields: `` `topic` #m (n columns) ``.
+    /// The topic instances left out for their columns: `` `topic` #m (n columns) ``, each
+    /// once (`rejected`) however often it is subscribed again.
     too_wide: Vec<String>,
+    rejected: std::collections::HashSet<(String, u8)>,
     /// Per subscription, when they are taken from a walk ([`RowVisitor`]): 0 until its first
     /// row, then its accumulator + 1, or [`NONE`].
     by_sub: Vec<u32>,
@@ -299,6 +303,25 @@ impl FieldStats {
     /// The accumulator of a subscription's rows (one per topic instance and format).
     pub(super) fn bind(&mut self, sub: &Subscription, schema: &Schema) -> Option<usize> {
         let id = sub.format()?;
+        let key = (
+            sub.name.clone(),
+            sub.multi_id,
+            schema.format(id).to_string(),
+        );
+        if let Some(&k) = self.by_key.get(&key) {
+            return Some(k);
+        }
+        // Counted before any column is made: an instance past the budget costs nothing.
+        let columns = crate::columns::column_count(schema, id);
+        if self.fields.saturating_add(columns) > MAX_FIELDS {
+            if self.rejected.insert((sub.name.clone(), sub.multi_id)) {
+                self.too_wide.push(format!(
+                    "`{}` #{} ({columns} columns)",
+                    sub.name, sub.multi_id
+                ));
+            }
+            return None;
+        }
         // Made once per format, not once per instance.
         let spec = match self.specs.get(&id) {
             Some(spec) => spec.clone()?,
@@ -308,18 +331,8 @@ impl FieldStats {
                 spec?
             }
         };
-        let key = (sub.name.clone(), sub.multi_id, spec.format().to_owned());
-        if let Some(&k) = self.by_key.get(&key) {
-            return Some(k);
-        }
-        let columns = spec.columns().len();
-        if self.fields.saturating_add(columns) > MAX_FIELDS {
-            self.too_wide.push(format!(
-                "`{}` #{} ({columns} columns)",
-                sub.name, sub.multi_id
-            ));
-            return None;
-        }
+        debug_assert_eq!(spec.columns().len(), columns, "column_count agrees");
+        self.fields += columns;
         let stage_rows = (STAGE_BYTES / spec.row_len().max(1)).clamp(1, 4096);
         Some(self.push(Acc::new(&sub.name, sub.multi_id, spec, stage_rows)))
     }
@@ -327,7 +340,6 @@ impl FieldStats {
     /// Adds an accumulator of a topic, instance and format not seen yet; gives its index.
     fn push(&mut self, acc: Acc) -> usize {
         let k = self.accs.len();
-        self.fields += acc.leaves.len();
         self.by_key
             .insert((acc.topic.clone(), acc.multi_id, acc.format.clone()), k);
         self.accs.push(acc);
@@ -403,9 +415,9 @@ impl FieldStats {
             missing.push(super::Missing {
                 fact: "field_stats".to_owned(),
                 reason: format!(
-                    "{} topic instances left out, their columns past the limit of {MAX_FIELDS} \
+                    "{} left out, their columns past the limit of {MAX_FIELDS} counted in \
                      field statistics: {}{more}",
-                    self.too_wide.len(),
+                    instances(self.too_wide.len()),
                     self.too_wide[..shown].join(", ")
                 ),
             });
@@ -1022,5 +1034,14 @@ mod tests {
                 );
             }
         }
+    }
+}
+
+/// "1 topic instance", "2 topic instances".
+pub(crate) fn instances(n: usize) -> String {
+    if n == 1 {
+        "1 topic instance".to_owned()
+    } else {
+        format!("{n} topic instances")
     }
 }

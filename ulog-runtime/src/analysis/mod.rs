@@ -97,7 +97,8 @@ pub struct Analysis {
 pub struct ModeSegment {
     /// PX4's name (`Position`, `Mission`, `RTL`...; `Unknown` for a number PX4 does not name).
     pub mode: String,
-    /// `nav_state`.
+    /// `nav_state` (255, a mode PX4 does not have, for a value no `uint8_t` holds: NaN or
+    /// 2.5 in a crafted log's `float` field).
     pub mode_id: u8,
     /// µs (log time).
     pub start_us: u64,
@@ -355,6 +356,10 @@ pub struct Missing {
     pub reason: String,
 }
 
+/// Most fields of the field indexes an [`Analyzer`] keeps for the formats it has seen
+/// (about 100 bytes each); PX4's logs have a few thousand.
+const MAX_INDEXED: usize = 200_000;
+
 /// The analysis's consumers, fed the rows of one pass in file order: made empty
 /// ([`Analyzer::new`]), given every event or row with the metadata read so far
 /// ([`Analyzer::event`], [`Analyzer::row`]; the first row's metadata gives the initial
@@ -381,6 +386,8 @@ pub struct Analyzer {
         crate::schema::FormatId,
         std::sync::Arc<crate::columns::FieldIndex>,
     >,
+    /// The fields of the indexes kept ([`MAX_INDEXED`]).
+    indexed: usize,
     /// Bytes the reader skipped as damaged.
     damaged_bytes: u64,
     /// Whether the initial parameters were read (at the first row).
@@ -567,7 +574,12 @@ impl Analyzer {
             Some(index) => Some(index.clone()),
             None => {
                 let index = std::sync::Arc::new(crate::columns::FieldIndex::of(schema, id)?);
-                self.indexes.insert(id, index.clone());
+                // Kept while the kept ones are few (a bound on memory for a log of very
+                // wide formats, each then made for its instance alone).
+                if self.indexed.saturating_add(index.len()) <= MAX_INDEXED {
+                    self.indexed += index.len();
+                    self.indexes.insert(id, index.clone());
+                }
                 Some(index)
             }
         });

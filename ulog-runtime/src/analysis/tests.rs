@@ -874,7 +874,7 @@ fn field_statistics_past_their_limit_are_said_missing() {
     let said = a.missing.iter().find(|m| m.fact == "field_stats").unwrap();
     assert!(
         said.reason
-            .starts_with("1 topic instances left out, their columns past the limit of 250000")
+            .starts_with("1 topic instance left out, their columns past the limit of 250000")
             && said.reason.contains("`big` #3 (65001 columns)"),
         "{}",
         said.reason

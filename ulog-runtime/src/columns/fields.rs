@@ -25,6 +25,11 @@ pub(crate) struct FieldIndex {
 }
 
 impl FieldIndex {
+    /// How many fields it names.
+    pub(crate) fn len(&self) -> usize {
+        self.names.len()
+    }
+
     /// The index of format `id`, if its layout is resolved.
     pub(crate) fn of(schema: &Schema, id: FormatId) -> Option<FieldIndex> {
         let spec = ColumnSpec::of(schema, id)?;

@@ -190,6 +190,27 @@ impl ColumnSpec {
     }
 }
 
+/// How many columns [`ColumnSpec::of`] makes of a format (padding left out, a `char`
+/// array one column), counted without making them: what a budget of columns checks before
+/// a spec is built. Saturates rather than overflows.
+pub(crate) fn column_count(schema: &Schema, id: FormatId) -> usize {
+    let Some(layout) = schema.resolved(id) else {
+        return 0;
+    };
+    layout
+        .fields
+        .iter()
+        .filter(|f| !f.padding)
+        .map(|f| match (f.kind, f.array_len) {
+            (FieldKind::Primitive(Primitive::Char), Some(_)) => 1,
+            (FieldKind::Primitive(_), _) => f.count(),
+            (FieldKind::Nested(nested), _) => {
+                f.count().saturating_mul(column_count(schema, nested))
+            }
+        })
+        .fold(0, usize::saturating_add)
+}
+
 /// Every leaf of a format: (name, kind, ULog type, offset), depth first; `char` arrays as
 /// one text leaf; padding left out (only at the top with `nested_padding`).
 fn flatten(

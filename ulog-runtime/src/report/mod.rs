@@ -261,7 +261,7 @@ impl Plots<'_> {
             "m",
             altitude,
             &[],
-            "no z in vehicle_local_position",
+            "no finite z in vehicle_local_position",
         )?;
         let (vx, vy, vz) = (t.field("vx"), t.field("vy"), t.field("vz"));
         let mut speed = Vec::new();
@@ -279,7 +279,7 @@ impl Plots<'_> {
             "m/s",
             speed,
             &[],
-            "no vx, vy, vz in vehicle_local_position",
+            "no finite vx, vy or vz in vehicle_local_position",
         )
     }
 
@@ -435,10 +435,12 @@ impl Plots<'_> {
     fn battery(&mut self) -> Result<(), ReportError> {
         let mut voltage = Vec::new();
         let mut current = Vec::new();
+        let mut any = false;
         for m in 0..4u8 {
             let Some(t) = self.table("battery_status", m) else {
                 continue;
             };
+            any = true;
             if let Some(v) = t.first_field(&["voltage_v", "voltage_filtered_v"]) {
                 voltage.push(t.series(&format!("battery {m}"), &v));
             }
@@ -446,14 +448,20 @@ impl Plots<'_> {
                 current.push(t.series(&format!("battery {m}"), &c));
             }
         }
-        let lacking = "the log has no battery_status rows";
+        let lacking = |what: &'static str| {
+            if any {
+                what
+            } else {
+                "the log has no battery_status rows"
+            }
+        };
         self.time(
             "battery_voltage",
             "Battery voltage",
             "V",
             voltage,
             &[],
-            lacking,
+            lacking("no finite voltage_v or voltage_filtered_v in battery_status"),
         )?;
         self.time(
             "battery_current",
@@ -461,7 +469,7 @@ impl Plots<'_> {
             "A",
             current,
             &[],
-            lacking,
+            lacking("no finite current_a or current_filtered_a in battery_status"),
         )
     }
 
@@ -796,7 +804,14 @@ mod extreme {
             });
             let (html, r) = rx
                 .recv_timeout(std::time::Duration::from_secs(120))
-                .unwrap_or_else(|_| panic!("no report within 2 minutes for {values:?}"))
+                .unwrap_or_else(|e| match e {
+                    std::sync::mpsc::RecvTimeoutError::Timeout => {
+                        panic!("no report within 2 minutes for {values:?}")
+                    }
+                    std::sync::mpsc::RecvTimeoutError::Disconnected => {
+                        panic!("the report panicked for {values:?} (see its message above)")
+                    }
+                })
                 .unwrap_or_else(|e| panic!("{values:?}: {e}"));
             let ids: Vec<&str> = r.plots.iter().map(|p| p.id.as_str()).collect();
             for id in [

@@ -56,8 +56,9 @@ fn err(e: impl std::fmt::Display) -> Error {
     e.to_string()
 }
 
-/// Values beyond this magnitude are drawn at a plot's edge: an axis ends within it, so its
-/// span, its padding and the ticks plotters steps along it stay finite numbers.
+/// Values beyond this magnitude are drawn at a plot's edge: an axis ends within it (and a
+/// twentieth of its span of padding, so within ±1.1e300), so that its span, its padding and
+/// the ticks plotters steps along it stay finite numbers.
 const LIMIT: f64 = 1e300;
 
 /// The range of an axis for values from `lo` to `hi` (either infinite or NaN, or `lo`
@@ -229,6 +230,21 @@ pub(super) fn xy_plot(
     series: &[Series],
     log_y: bool,
 ) -> Result<String, Error> {
+    // Only finite points (a spectrum or a step response of extreme values may hold others:
+    // plotters would draw a NaN at an edge).
+    let finite: Vec<Series> = series
+        .iter()
+        .map(|s| Series {
+            name: s.name.clone(),
+            points: s
+                .points
+                .iter()
+                .copied()
+                .filter(|p| p.0.is_finite() && p.1.is_finite())
+                .collect(),
+        })
+        .collect();
+    let series = &finite[..];
     let (x0, x1) = bounds(series, |p| p.0);
     let (x0, x1) = exact_axis(x0, x1);
     let mut svg = String::new();

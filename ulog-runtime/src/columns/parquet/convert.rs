@@ -564,6 +564,7 @@ struct Pass<'c> {
     columns: usize,
     /// The topic instances left out for their columns: `` `topic` #m (n columns) ``.
     too_wide: Vec<String>,
+    rejected: std::collections::HashSet<(String, u8)>,
     logged: Vec<LoggedMessage>,
     changes: Vec<ParameterChange>,
     dropouts: Vec<Dropout>,
@@ -602,6 +603,7 @@ impl<'c> Pass<'c> {
             specs: HashMap::new(),
             columns: 0,
             too_wide: Vec::new(),
+            rejected: std::collections::HashSet::new(),
             logged: Vec::new(),
             changes: Vec::new(),
             dropouts: Vec::new(),
@@ -777,25 +779,31 @@ impl<'c> Pass<'c> {
         if let Some(&k) = self.instance_index.get(&key) {
             return (s, k as u32 + 1);
         }
+        let Some(id) = sub.format() else {
+            return (s, LEFT_OUT);
+        };
+        // Counted before any column is made: an instance past the budget costs nothing.
+        let (open, limit) = (self.columns, self.converter.options.max_columns);
+        let columns = crate::columns::column_count(row.schema(), id);
+        if open.saturating_add(columns) > limit {
+            // Named once, however often it is subscribed again.
+            if self.rejected.insert(key) {
+                self.too_wide.push(format!(
+                    "`{}` #{} ({columns} columns)",
+                    sub.name, sub.multi_id
+                ));
+            }
+            return (s, LEFT_OUT);
+        }
         // Made once per format, not once per instance.
-        let spec = sub.format().and_then(|id| {
-            self.specs
-                .entry(id)
-                .or_insert_with(|| ColumnSpec::of(row.schema(), id).map(Arc::new))
-                .clone()
-        });
+        let spec = self
+            .specs
+            .entry(id)
+            .or_insert_with(|| ColumnSpec::of(row.schema(), id).map(Arc::new))
+            .clone();
         let Some(spec) = spec else {
             return (s, LEFT_OUT);
         };
-        let (open, limit) = (self.columns, self.converter.options.max_columns);
-        let columns = spec.columns().len();
-        if open.saturating_add(columns) > limit {
-            self.too_wide.push(format!(
-                "`{}` #{} ({columns} columns)",
-                sub.name, sub.multi_id
-            ));
-            return (s, LEFT_OUT);
-        }
         self.columns += columns;
         let instance = self.instance(spec, &sub.name, sub.multi_id);
         self.instance_index.insert(key, self.instances.len());
@@ -863,20 +871,31 @@ impl<'c> Pass<'c> {
         bytes: u64,
         threads: usize,
     ) -> Result<Conversion, ConvertError> {
-        if !self.too_wide.is_empty() {
+        // The instances left out for their columns, said once in the notes and, where the
+        // field statistics come from the tables, in the analysis.
+        let too_wide = (!self.too_wide.is_empty()).then(|| {
             let shown = self.too_wide.len().min(5);
             let more = match self.too_wide.len() - shown {
                 0 => String::new(),
                 n => format!(" and {n} more"),
             };
-            self.notes.push(format!(
-                "{} topic instances left out, their columns past the limit of {} open at \
-                 once (--max-columns, ParquetOptions::max_columns): {}{more}; their rows are \
-                 in no file and in no field statistics",
-                self.too_wide.len(),
+            let n = self.too_wide.len();
+            format!(
+                "{n} topic instance{} left out, their columns past the limit of {} open at \
+                 once (--max-columns, ParquetOptions::max_columns): {}{more}",
+                if n == 1 { "" } else { "s" },
                 self.converter.options.max_columns,
                 self.too_wide[..shown].join(", ")
-            ));
+            )
+        });
+        if let Some(text) = &too_wide {
+            let stats = if self.stats_from_columns && self.analyzer.is_some() {
+                " and in no field statistics"
+            } else {
+                ""
+            };
+            self.notes
+                .push(format!("{text}; their rows are in no file{stats}"));
         }
         let root = self.converter.root.clone();
         let (log_dir, moved) = self.converter.claim_log_dir(&self.stem, &identity.sha256)?;
@@ -895,7 +914,14 @@ impl<'c> Pass<'c> {
         let closed = close_all(closing, identity, threads);
         let analysis: Option<Analysis> = self.analyzer.take().map(|a| {
             if self.stats_from_columns {
-                a.finish_with_columns(meta, stats)
+                let mut analysis = a.finish_with_columns(meta, stats);
+                if let Some(text) = too_wide {
+                    analysis.missing.push(crate::analysis::Missing {
+                        fact: "field_stats".to_owned(),
+                        reason: text,
+                    });
+                }
+                analysis
             } else {
                 a.finish(meta)
             }

@@ -1901,10 +1901,23 @@ fn an_instance_past_the_column_limit_is_left_out_and_said() {
     assert_eq!(written, [("battery", 0), ("battery", 1)]);
     assert!(
         conv.notes.iter().any(|n| n.starts_with(
-            "1 topic instances left out, their columns past the limit of 11 open at once"
-        ) && n.contains("`sensors/gyro` #0 (2 columns)")),
+            "1 topic instance left out, their columns past the limit of 11 open at once"
+        ) && n.contains("`sensors/gyro` #0 (2 columns)")
+            && n.ends_with("their rows are in no file and in no field statistics")),
         "{:?}",
         conv.notes
+    );
+    // The analysis in metadata.json says its field statistics lack them.
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&conv.metadata).unwrap()).unwrap();
+    let missing = json["analysis"]["missing"].as_array().unwrap();
+    assert!(
+        missing.iter().any(|m| m["fact"] == "field_stats"
+            && m["reason"]
+                .as_str()
+                .unwrap()
+                .contains("`sensors/gyro` #0 (2 columns)")),
+        "{missing:?}"
     );
     // The default takes them all.
     let conv = Converter::new(&root, ParquetOptions::default())
