@@ -356,6 +356,26 @@ pub struct Missing {
     pub reason: String,
 }
 
+/// A format's fields by name, made at the first question (a topic no consumer reads is
+/// never indexed: a crafted log of many formats of 65,000 fields would take seconds).
+pub(crate) struct LazyIndex<'s> {
+    schema: &'s crate::schema::Schema,
+    id: crate::schema::FormatId,
+    made: std::cell::OnceCell<Option<std::sync::Arc<crate::columns::FieldIndex>>>,
+}
+
+impl LazyIndex<'_> {
+    /// The leaf of a field (pyulog's name: `q[0]`, `esc[3].esc_rpm`).
+    pub(crate) fn get(&self, name: &str) -> Option<crate::columns::Leaf> {
+        self.made
+            .get_or_init(|| {
+                crate::columns::FieldIndex::of(self.schema, self.id).map(std::sync::Arc::new)
+            })
+            .as_ref()?
+            .get(name)
+    }
+}
+
 /// Most fields of the field indexes an [`Analyzer`] keeps for the formats it has seen
 /// (about 100 bytes each); PX4's logs have a few thousand.
 const MAX_INDEXED: usize = 200_000;
@@ -570,20 +590,7 @@ impl Analyzer {
     }
 
     fn route(&mut self, sub: &Subscription, schema: &crate::schema::Schema) -> Route {
-        let index = sub.format().and_then(|id| match self.indexes.get(&id) {
-            Some(index) => Some(index.clone()),
-            None => {
-                let index = std::sync::Arc::new(crate::columns::FieldIndex::of(schema, id)?);
-                // Kept while the kept ones are few (a bound on memory for a log of very
-                // wide formats, each then made for its instance alone).
-                if self.indexed.saturating_add(index.len()) <= MAX_INDEXED {
-                    self.indexed += index.len();
-                    self.indexes.insert(id, index.clone());
-                }
-                Some(index)
-            }
-        });
-        let Some(index) = index else {
+        let Some(id) = sub.format() else {
             return Route {
                 state: None,
                 motion: None,
@@ -594,6 +601,15 @@ impl Analyzer {
                 fields: None,
             };
         };
+        // Made when a consumer asks for a field of a topic it reads, not for every topic.
+        let index = LazyIndex {
+            schema,
+            id,
+            made: std::cell::OnceCell::new(),
+        };
+        if let Some(kept) = self.indexes.get(&id) {
+            let _ = index.made.set(Some(kept.clone()));
+        }
         let name = sub.name.as_str();
         let Parts {
             core,
@@ -603,7 +619,7 @@ impl Analyzer {
             fields,
         } = self.parts;
         let spectral = || motion::SpectralFields::bind(name, &index);
-        Route {
+        let route = Route {
             state: if core || motion || steps || spectra {
                 state::Fields::bind(name, &index)
             } else {
@@ -623,7 +639,17 @@ impl Analyzer {
             } else {
                 None
             },
+        };
+        // Kept for the format's other instances while the kept ones are few (a bound on
+        // memory for a log of very wide formats, each then made for its instance alone).
+        if let Some(Some(made)) = index.made.get()
+            && !self.indexes.contains_key(&id)
+            && self.indexed.saturating_add(made.len()) <= MAX_INDEXED
+        {
+            self.indexed += made.len();
+            self.indexes.insert(id, made.clone());
         }
+        route
     }
 
     /// The analysis, with what the log's metadata adds (parameters, defaults).

@@ -7,7 +7,8 @@
 use super::spectral::{StepResponse, Welch};
 use super::state::FlightState;
 use super::{AxisResponse, Missing, Motion, SpectrumOf, Stats};
-use crate::columns::{FieldIndex, Leaf};
+use crate::analysis::LazyIndex;
+use crate::columns::Leaf;
 
 /// Where a motion topic's fields are.
 pub(super) enum Fields {
@@ -25,7 +26,7 @@ pub(super) enum Fields {
     },
 }
 
-fn three(index: &FieldIndex, names: [&str; 3]) -> Option<[Leaf; 3]> {
+fn three(index: &LazyIndex<'_>, names: [&str; 3]) -> Option<[Leaf; 3]> {
     Some([
         index.get(names[0])?,
         index.get(names[1])?,
@@ -34,7 +35,7 @@ fn three(index: &FieldIndex, names: [&str; 3]) -> Option<[Leaf; 3]> {
 }
 
 impl Fields {
-    pub(super) fn bind(topic: &str, index: &FieldIndex) -> Option<Fields> {
+    pub(super) fn bind(topic: &str, index: &LazyIndex<'_>) -> Option<Fields> {
         match topic {
             "vehicle_local_position" => Some(Fields::Local {
                 pos: three(index, ["x", "y", "z"])?,
@@ -282,8 +283,8 @@ pub(super) enum SpectralFields {
 impl SpectralFields {
     /// The fields, if numbers (a sample out of flight is skipped unread: a field that is not
     /// a number, text in a crafted log, would never be read at all).
-    pub(super) fn bind(topic: &str, index: &FieldIndex) -> Option<SpectralFields> {
-        let three = |index: &FieldIndex, names: [&str; 3]| {
+    pub(super) fn bind(topic: &str, index: &LazyIndex<'_>) -> Option<SpectralFields> {
+        let three = |index: &LazyIndex<'_>, names: [&str; 3]| {
             three(index, names).filter(|l| l.iter().all(|l| matches!(l, Leaf::Value(..))))
         };
         let xyz = || three(index, ["xyz[0]", "xyz[1]", "xyz[2]"]);

@@ -6,7 +6,8 @@
 use super::modes::Modes;
 use super::state::FlightState;
 use super::{Battery, BatteryInstance, GpsQuality, ImuVibration, Missing, TrackPoint, Vibration};
-use crate::columns::{FieldIndex, Leaf};
+use crate::analysis::LazyIndex;
+use crate::columns::Leaf;
 use crate::read::Metadata;
 
 /// Where a sensor topic's fields are.
@@ -41,7 +42,7 @@ pub(super) enum Fields {
 
 /// The position fields of a GPS topic: `latitude_deg`, `longitude_deg`, `altitude_msl_m`
 /// (degrees, meters) or `lat`, `lon`, `alt` (int32: 1e-7°, mm).
-pub(crate) fn gps_position(index: &FieldIndex) -> Option<([Leaf; 3], f64, f64)> {
+pub(crate) fn gps_position(index: &LazyIndex<'_>) -> Option<([Leaf; 3], f64, f64)> {
     if let (Some(a), Some(b), Some(c)) = (
         index.get("latitude_deg"),
         index.get("longitude_deg"),
@@ -59,7 +60,7 @@ pub(crate) fn gps_position(index: &FieldIndex) -> Option<([Leaf; 3], f64, f64)> 
 }
 
 impl Fields {
-    pub(super) fn bind(topic: &str, multi_id: u8, index: &FieldIndex) -> Option<Fields> {
+    pub(super) fn bind(topic: &str, multi_id: u8, index: &LazyIndex<'_>) -> Option<Fields> {
         match topic {
             "battery_status" => Some(Fields::Battery {
                 multi_id,

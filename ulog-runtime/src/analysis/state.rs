@@ -3,7 +3,8 @@
 //! ask of each row ("was it flying then?"), and what [`Modes`] makes segments of.
 
 use super::modes::Modes;
-use crate::columns::{FieldIndex, Leaf};
+use crate::analysis::LazyIndex;
+use crate::columns::Leaf;
 
 /// Where a state topic's fields are.
 pub(super) enum Fields {
@@ -21,7 +22,7 @@ pub(super) enum Fields {
 }
 
 impl Fields {
-    pub(super) fn bind(topic: &str, index: &FieldIndex) -> Option<Fields> {
+    pub(super) fn bind(topic: &str, index: &LazyIndex<'_>) -> Option<Fields> {
         match topic {
             "vehicle_status" => Some(Fields::Status {
                 nav_state: index.get("nav_state"),

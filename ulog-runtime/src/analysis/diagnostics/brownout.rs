@@ -5,8 +5,9 @@
 //! the highest voltage seen so far (a LiPo cell holds at most 4.35 V).
 
 use super::{Diagnostic, Episode, Evidence, Severity, secs};
+use crate::analysis::LazyIndex;
 use crate::analysis::state::FlightState;
-use crate::columns::{FieldIndex, Leaf};
+use crate::columns::Leaf;
 use crate::read::Metadata;
 
 /// Volts per cell below which a pack browns out.
@@ -23,7 +24,7 @@ pub(crate) struct Fields {
 }
 
 impl Fields {
-    pub(crate) fn bind(multi_id: u8, index: &FieldIndex) -> Option<Fields> {
+    pub(crate) fn bind(multi_id: u8, index: &LazyIndex<'_>) -> Option<Fields> {
         Some(Fields {
             multi_id,
             voltage: index

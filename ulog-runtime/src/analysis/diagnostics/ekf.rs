@@ -4,8 +4,9 @@
 //! finding per episode, per estimator instance and innovation.
 
 use super::{Diagnostic, Episode, Evidence, Severity, secs};
+use crate::analysis::LazyIndex;
 use crate::analysis::state::FlightState;
-use crate::columns::{FieldIndex, Leaf};
+use crate::columns::Leaf;
 
 /// The ratio above which an innovation fails its test.
 pub const THRESHOLD: f64 = 1.0;
@@ -30,7 +31,7 @@ pub(crate) struct Fields {
 }
 
 impl Fields {
-    pub(crate) fn bind(multi_id: u8, index: &FieldIndex) -> Option<Fields> {
+    pub(crate) fn bind(multi_id: u8, index: &LazyIndex<'_>) -> Option<Fields> {
         let ratios: Vec<(usize, Leaf)> = RATIOS
             .iter()
             .enumerate()

@@ -7,8 +7,9 @@
 //! jamming was critical; a warning otherwise. A log that never gets a fix reports nothing.
 
 use super::{Diagnostic, Episode, Evidence, Severity, secs};
+use crate::analysis::LazyIndex;
 use crate::analysis::state::FlightState;
-use crate::columns::{FieldIndex, Leaf};
+use crate::columns::Leaf;
 
 /// Rows of fix before anything is judged.
 pub const SETTLE_ROWS: u32 = 10;
@@ -28,7 +29,7 @@ pub(crate) struct Fields {
 }
 
 impl Fields {
-    pub(crate) fn bind(multi_id: u8, index: &FieldIndex) -> Option<Fields> {
+    pub(crate) fn bind(multi_id: u8, index: &LazyIndex<'_>) -> Option<Fields> {
         Some(Fields {
             multi_id,
             fix: index.get("fix_type")?,

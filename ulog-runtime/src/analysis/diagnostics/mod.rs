@@ -17,7 +17,7 @@ pub mod motor;
 pub mod rc;
 
 use super::state::FlightState;
-use crate::columns::FieldIndex;
+use crate::analysis::LazyIndex;
 use crate::read::Metadata;
 
 /// How bad a finding is.
@@ -142,7 +142,7 @@ pub(crate) enum Fields {
 }
 
 impl Fields {
-    pub(crate) fn bind(topic: &str, multi_id: u8, index: &FieldIndex) -> Option<Fields> {
+    pub(crate) fn bind(topic: &str, multi_id: u8, index: &LazyIndex<'_>) -> Option<Fields> {
         match topic {
             "battery_status" => brownout::Fields::bind(multi_id, index).map(Fields::Battery),
             "estimator_status" => ekf::Fields::bind(multi_id, index).map(Fields::Estimator),

@@ -12,9 +12,10 @@
 //! flight, not a failure.
 
 use super::{Diagnostic, Evidence, Severity, secs};
+use crate::analysis::LazyIndex;
 use crate::analysis::modes::mode_name;
 use crate::analysis::state::FlightState;
-use crate::columns::{FieldIndex, Leaf};
+use crate::columns::Leaf;
 
 /// How long one motor must stay at idle while the others fly, µs.
 pub const DROP_US: u64 = 300_000;
@@ -31,7 +32,7 @@ pub(crate) struct Fields {
 }
 
 impl Fields {
-    pub(crate) fn bind(multi_id: u8, index: &FieldIndex) -> Option<Fields> {
+    pub(crate) fn bind(multi_id: u8, index: &LazyIndex<'_>) -> Option<Fields> {
         let outputs: Vec<Leaf> = (0..)
             .map_while(|k| index.get(&format!("output[{k}]")))
             .collect();

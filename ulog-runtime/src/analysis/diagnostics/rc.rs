@@ -3,8 +3,9 @@
 //! The episode ends when the signal is back or the vehicle disarms (or the log ends).
 
 use super::{Diagnostic, Evidence, Severity, secs};
+use crate::analysis::LazyIndex;
 use crate::analysis::state::FlightState;
-use crate::columns::{FieldIndex, Leaf};
+use crate::columns::Leaf;
 
 /// The shortest loss reported, µs.
 pub const MIN_DURATION_US: u64 = 500_000;
@@ -18,7 +19,7 @@ pub(crate) struct Fields {
 }
 
 impl Fields {
-    pub(crate) fn bind(multi_id: u8, index: &FieldIndex) -> Option<Fields> {
+    pub(crate) fn bind(multi_id: u8, index: &LazyIndex<'_>) -> Option<Fields> {
         Some(Fields {
             multi_id,
             lost: index.get("rc_lost")?,
