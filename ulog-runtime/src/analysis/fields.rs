@@ -970,6 +970,15 @@ fn fold_float<T: Float>(
     }
 }
 
+/// "1 topic instance", "2 topic instances".
+pub(crate) fn instances(n: usize) -> String {
+    if n == 1 {
+        "1 topic instance".to_owned()
+    } else {
+        format!("{n} topic instances")
+    }
+}
+
 #[cfg(all(test, feature = "parquet"))]
 mod tests {
     use super::{Stat, reduce_column};
@@ -1034,14 +1043,5 @@ mod tests {
                 );
             }
         }
-    }
-}
-
-/// "1 topic instance", "2 topic instances".
-pub(crate) fn instances(n: usize) -> String {
-    if n == 1 {
-        "1 topic instance".to_owned()
-    } else {
-        format!("{n} topic instances")
     }
 }
