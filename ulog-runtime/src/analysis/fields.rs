@@ -8,7 +8,7 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 use super::FieldStat;
-use crate::columns::{ColumnKind, ColumnSpec, Source};
+use crate::columns::{ColumnBudget, ColumnKind, ColumnSpec, Source};
 #[cfg(feature = "parquet")]
 use crate::columns::{ColumnValues, Columns};
 use crate::read::{Metadata, Row, RowVisitor, Subscription};
@@ -262,12 +262,9 @@ pub(super) struct FieldStats {
     by_key: HashMap<(String, u8, String), usize>,
     /// The columns of each format bound (`None`: it has none to count).
     specs: HashMap<crate::schema::FormatId, Option<Arc<ColumnSpec>>>,
-    /// The columns of the formats bound, all together ([`MAX_FIELDS`]).
-    fields: usize,
-    /// The topic instances left out for their columns: `` `topic` #m (n columns) ``, each
-    /// once (`rejected`) however often it is subscribed again.
-    too_wide: Vec<String>,
-    rejected: std::collections::HashSet<(String, u8)>,
+    /// The columns of the formats bound, all together ([`MAX_FIELDS`]), and the instances
+    /// left out.
+    budget: ColumnBudget,
     /// Per subscription, when they are taken from a walk ([`RowVisitor`]): 0 until its first
     /// row, then its accumulator + 1, or [`NONE`].
     by_sub: Vec<u32>,
@@ -313,13 +310,10 @@ impl FieldStats {
         }
         // Counted before any column is made: an instance past the budget costs nothing.
         let columns = crate::columns::column_count(schema, id);
-        if self.fields.saturating_add(columns) > MAX_FIELDS {
-            if self.rejected.insert((sub.name.clone(), sub.multi_id)) {
-                self.too_wide.push(format!(
-                    "`{}` #{} ({columns} columns)",
-                    sub.name, sub.multi_id
-                ));
-            }
+        if !self
+            .budget
+            .admit(MAX_FIELDS, &sub.name, sub.multi_id, columns)
+        {
             return None;
         }
         // Made once per format, not once per instance.
@@ -332,7 +326,6 @@ impl FieldStats {
             }
         };
         debug_assert_eq!(spec.columns().len(), columns, "column_count agrees");
-        self.fields += columns;
         let stage_rows = (STAGE_BYTES / spec.row_len().max(1)).clamp(1, 4096);
         Some(self.push(Acc::new(&sub.name, sub.multi_id, spec, stage_rows)))
     }
@@ -384,7 +377,7 @@ impl FieldStats {
 
     /// Takes in the statistics of another part of the rows.
     pub(super) fn merge(&mut self, mut other: FieldStats) {
-        self.too_wide.append(&mut other.too_wide);
+        self.budget.append(std::mem::take(&mut other.budget));
         for mut theirs in other.accs.drain(..) {
             theirs.reduce();
             let key = (theirs.topic.clone(), theirs.multi_id, theirs.format.clone());
@@ -406,20 +399,13 @@ impl FieldStats {
     /// The statistics of every counted field with a finite value, by topic, instance and
     /// field order; the instances left out for [`MAX_FIELDS`] said in `missing`.
     pub(super) fn finish(mut self, missing: &mut Vec<super::Missing>) -> Vec<FieldStat> {
-        if !self.too_wide.is_empty() {
-            let shown = self.too_wide.len().min(5);
-            let more = match self.too_wide.len() - shown {
-                0 => String::new(),
-                n => format!(" and {n} more"),
-            };
+        if let Some(reason) = self
+            .budget
+            .said(&format!("{MAX_FIELDS} counted in field statistics"))
+        {
             missing.push(super::Missing {
                 fact: "field_stats".to_owned(),
-                reason: format!(
-                    "{} left out, their columns past the limit of {MAX_FIELDS} counted in \
-                     field statistics: {}{more}",
-                    instances(self.too_wide.len()),
-                    self.too_wide[..shown].join(", ")
-                ),
+                reason,
             });
         }
         for a in &mut self.accs {
@@ -967,15 +953,6 @@ fn fold_float<T: Float>(
                 count: 1,
             });
         }
-    }
-}
-
-/// "1 topic instance", "2 topic instances".
-pub(crate) fn instances(n: usize) -> String {
-    if n == 1 {
-        "1 topic instance".to_owned()
-    } else {
-        format!("{n} topic instances")
     }
 }
 

@@ -211,6 +211,65 @@ pub(crate) fn column_count(schema: &Schema, id: FormatId) -> usize {
         .fold(0, usize::saturating_add)
 }
 
+/// A budget of columns for the topic instances a reader takes in (the Parquet converter's
+/// open tables, the analysis's field statistics), counted with [`column_count`] before any
+/// column is made, and the instances it left out, each named once however often it is
+/// subscribed again.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct ColumnBudget {
+    used: usize,
+    rejected: std::collections::HashSet<(String, u8)>,
+    /// `` `topic` #m (n columns) ``, in the order they were left out.
+    left_out: Vec<String>,
+}
+
+impl ColumnBudget {
+    /// Whether an instance of `columns` columns fits within `limit` with those taken so far:
+    /// if so it is taken, if not it is named.
+    pub(crate) fn admit(
+        &mut self,
+        limit: usize,
+        topic: &str,
+        multi_id: u8,
+        columns: usize,
+    ) -> bool {
+        if self.used.saturating_add(columns) <= limit {
+            self.used += columns;
+            return true;
+        }
+        if self.rejected.insert((topic.to_owned(), multi_id)) {
+            self.left_out
+                .push(format!("`{topic}` #{multi_id} ({columns} columns)"));
+        }
+        false
+    }
+
+    /// The instances another part of a walk left out, after these.
+    pub(crate) fn append(&mut self, other: ColumnBudget) {
+        for name in other.left_out {
+            self.left_out.push(name);
+        }
+    }
+
+    /// What was left out, if anything: "2 topic instances left out, their columns past the
+    /// limit of {limit}: `a` #0 (9 columns), `a` #1 (9 columns)", the first five named.
+    pub(crate) fn said(&self, limit: &str) -> Option<String> {
+        let n = self.left_out.len();
+        let shown = n.min(5);
+        let more = match n - shown {
+            0 => String::new(),
+            rest => format!(" and {rest} more"),
+        };
+        (n > 0).then(|| {
+            format!(
+                "{n} topic instance{} left out, their columns past the limit of {limit}: {}{more}",
+                if n == 1 { "" } else { "s" },
+                self.left_out[..shown].join(", ")
+            )
+        })
+    }
+}
+
 /// Every leaf of a format: (name, kind, ULog type, offset), depth first; `char` arrays as
 /// one text leaf; padding left out (only at the top with `nested_padding`).
 fn flatten(

@@ -19,7 +19,7 @@ use super::encode::{Encoder, Output, TableWork};
 use super::fleet::TablePlace;
 use super::{Admission, AdmitRow, LogIdentity, ParquetOptions, Table, TableWritten};
 use crate::analysis::{Analysis, Analyzer, ColumnStats};
-use crate::columns::{ColumnSpec, RowBatch};
+use crate::columns::{ColumnBudget, ColumnSpec, RowBatch};
 use crate::document::{Collected, KEPT_DIAGNOSTICS, LogFacts};
 use crate::file_names::FileNames;
 use crate::read::GpsClock;
@@ -560,11 +560,9 @@ struct Pass<'c> {
     instance_index: HashMap<(String, u8), usize>,
     /// The columns of each format an instance was bound to (`None`: it has none).
     specs: HashMap<crate::schema::FormatId, Option<Arc<ColumnSpec>>>,
-    /// The columns of the tables open ([`ParquetOptions::max_columns`]).
-    columns: usize,
-    /// The topic instances left out for their columns: `` `topic` #m (n columns) ``.
-    too_wide: Vec<String>,
-    rejected: std::collections::HashSet<(String, u8)>,
+    /// The columns of the tables open ([`ParquetOptions::max_columns`]), and the instances
+    /// left out.
+    budget: ColumnBudget,
     logged: Vec<LoggedMessage>,
     changes: Vec<ParameterChange>,
     dropouts: Vec<Dropout>,
@@ -601,9 +599,7 @@ impl<'c> Pass<'c> {
             instances: Vec::new(),
             instance_index: HashMap::new(),
             specs: HashMap::new(),
-            columns: 0,
-            too_wide: Vec::new(),
-            rejected: std::collections::HashSet::new(),
+            budget: ColumnBudget::default(),
             logged: Vec::new(),
             changes: Vec::new(),
             dropouts: Vec::new(),
@@ -783,16 +779,9 @@ impl<'c> Pass<'c> {
             return (s, LEFT_OUT);
         };
         // Counted before any column is made: an instance past the budget costs nothing.
-        let (open, limit) = (self.columns, self.converter.options.max_columns);
         let columns = crate::columns::column_count(row.schema(), id);
-        if open.saturating_add(columns) > limit {
-            // Named once, however often it is subscribed again.
-            if self.rejected.insert(key) {
-                self.too_wide.push(format!(
-                    "`{}` #{} ({columns} columns)",
-                    sub.name, sub.multi_id
-                ));
-            }
+        let limit = self.converter.options.max_columns;
+        if !self.budget.admit(limit, &sub.name, sub.multi_id, columns) {
             return (s, LEFT_OUT);
         }
         // Made once per format, not once per instance.
@@ -804,7 +793,6 @@ impl<'c> Pass<'c> {
         let Some(spec) = spec else {
             return (s, LEFT_OUT);
         };
-        self.columns += columns;
         let instance = self.instance(spec, &sub.name, sub.multi_id);
         self.instance_index.insert(key, self.instances.len());
         self.instances.push(instance);
@@ -873,21 +861,10 @@ impl<'c> Pass<'c> {
     ) -> Result<Conversion, ConvertError> {
         // The instances left out for their columns, said once in the notes and, where the
         // field statistics come from the tables, in the analysis.
-        let too_wide = (!self.too_wide.is_empty()).then(|| {
-            let shown = self.too_wide.len().min(5);
-            let more = match self.too_wide.len() - shown {
-                0 => String::new(),
-                n => format!(" and {n} more"),
-            };
-            let n = self.too_wide.len();
-            format!(
-                "{n} topic instance{} left out, their columns past the limit of {} open at \
-                 once (--max-columns, ParquetOptions::max_columns): {}{more}",
-                if n == 1 { "" } else { "s" },
-                self.converter.options.max_columns,
-                self.too_wide[..shown].join(", ")
-            )
-        });
+        let too_wide = self.budget.said(&format!(
+            "{} open at once (--max-columns, ParquetOptions::max_columns)",
+            self.converter.options.max_columns
+        ));
         if let Some(text) = &too_wide {
             let stats = if self.stats_from_columns && self.analyzer.is_some() {
                 " and in no field statistics"
