@@ -37,8 +37,8 @@ use super::{ReadError, Row};
 ///   refilled) than in the large folios a file read from start to end sits in; a read
 ///   copies every byte either way, and only its lookup of the cached pages costs more with
 ///   small ones. On a 400 MB log, against px4-ulog's CPU time, the map's walk took 0.33
-///   (large folios) to 0.45 (4 KiB pages) and this one 0.36 to 0.43 (the README's section
-///   "Side by side with PX4's converter and px4-ulog").
+///   (large folios) to 0.46 (4 KiB pages) and this one 0.36 to 0.45 (the README's section
+///   "Side by side with PX4's converter and px4-ulog", and `benches/RESULTS.md`).
 /// - A file truncated by another process meanwhile ends the walk early (a message the cut
 ///   falls in is reported as truncated; rows already read into a window are still folded),
 ///   where a map's read of a page the file no longer has ends the process (`SIGBUS`).
