@@ -88,12 +88,14 @@ fn main() {
             .map(PathBuf::from)
             .unwrap_or_else(|| manifest.join("../../shared/testdata/ulog")),
     );
+    let project = manifest.join("../../shared/testdata/ulog");
     let msg_root = absolute(
         std::env::var_os("PX4_MSG_DIR")
             .map(PathBuf::from)
             .unwrap_or_else(|| manifest.join("../../shared/testdata/px4-msg")),
     );
     println!("cargo:rerun-if-changed={}", corpus.display());
+    println!("cargo:rerun-if-changed={}", project.display());
     println!("cargo:rerun-if-changed={}", msg_root.display());
     let out = PathBuf::from(std::env::var_os("OUT_DIR").unwrap());
     let files = files::ulg_files(&corpus);
@@ -197,7 +199,12 @@ fn main() {
         );
         writeln!(msg_pairs_list, "    ({folder:?}, &{logs:?}),").unwrap();
         for log in &logs {
-            let Ok(read) = ulog_runtime::Log::read(corpus.join(log)) else {
+            // The paired logs are the project corpus's: from ULOG_CORPUS when it holds them
+            // (as `ulog_tests::fixture` finds them), else from the project corpus.
+            let Some(read) = [&corpus, &project]
+                .into_iter()
+                .find_map(|dir| ulog_runtime::Log::read(dir.join(log)).ok())
+            else {
                 continue; // the corpus test reports a missing paired log
             };
             let schema = read.metadata().schema();

@@ -9,8 +9,26 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 
 
+PROJECT_CORPUS = ROOT.parent / "shared" / "testdata" / "ulog"
+
+
 def corpus_dir() -> Path:
-    return Path(os.environ.get("ULOG_CORPUS", ROOT.parent / "shared" / "testdata" / "ulog"))
+    return Path(os.environ.get("ULOG_CORPUS", PROJECT_CORPUS))
+
+
+def known_log(name: str) -> Path:
+    """A file of the project's corpus whose known facts a test checks
+    (``pyulog/sample_log_small.ulg``): from ``ULOG_CORPUS`` when it holds the file, else
+    from the project's corpus, so that a folder of other logs named by ``ULOG_CORPUS``
+    leaves these tests checking what they check. Neither: a failure under CI, else the
+    test is skipped, saying why."""
+    for d in (corpus_dir(), PROJECT_CORPUS):
+        if (d / name).exists():
+            return d / name
+    why = f"{name} is in neither {corpus_dir()} nor {PROJECT_CORPUS} (set ULOG_CORPUS)"
+    if under_ci():
+        raise RuntimeError(why)
+    pytest.skip(why)
 
 
 def under_ci() -> bool:

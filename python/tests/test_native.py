@@ -128,7 +128,7 @@ def test_polars_duckdb_and_pandas_take_a_table():
     import pandas as pd
     import polars as pl
 
-    path = str(pytest.importorskip("conftest").corpus_dir() / "pyulog" / "sample_log_small.ulg")
+    path = str(pytest.importorskip("conftest").known_log("pyulog/sample_log_small.ulg"))
     log = ulog.open(path)
     t = log.table("vehicle_attitude", columns=["timestamp", "q[0]"])
     assert t.column_names == ["timestamp", "q[0]"]
@@ -184,9 +184,9 @@ def test_polars_duckdb_and_pandas_take_a_table():
 
 
 def test_the_log_says_what_the_reader_read():
-    from conftest import corpus_dir
+    from conftest import known_log
 
-    path = corpus_dir() / "pyulog" / "sample_px4_events.ulg"
+    path = known_log("pyulog/sample_px4_events.ulg")
     u = pyulog.ULog(str(path))
     log = ulog.open(path)
     assert log.header["start_timestamp"] == u.start_timestamp
@@ -220,9 +220,9 @@ def test_the_log_says_what_the_reader_read():
 def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
     import pyarrow as pa
     import pyarrow.parquet as pq
-    from conftest import corpus_dir
+    from conftest import known_log
 
-    good = corpus_dir() / "pyulog" / "sample_log_small.ulg"
+    good = known_log("pyulog/sample_log_small.ulg")
     bad = tmp_path / "not_a_log.ulg"
     bad.write_bytes(b"not a log at all")
     results = ulog.to_parquet([good, bad], tmp_path / "out")
@@ -248,10 +248,8 @@ def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
         ulog.to_parquet(str(good), tmp_path / "none", topics="zzzzzzzzzzzzzz")
     with pytest.raises(KeyError, match="no topic `batery_status` in any of the logs that can be read; did you mean"):
         ulog.to_parquet([good, bad], tmp_path / "none", topics=["batery_status"])
-    lacking = next(
-        p for p in sorted(corpus_dir().rglob("*.ulg"))
-        if "battery_status" not in ulog.ULog(str(p), parse_header_only=True).message_formats
-    )
+    lacking = known_log("yule_log/short_list.ulg")
+    assert "battery_status" not in ulog.ULog(str(lacking), parse_header_only=True).message_formats
     with pytest.warns(UserWarning) as said:
         some = ulog.to_parquet([good, lacking], tmp_path / "some", topics=["battery_status"])
     assert some[1]["ok"] and some[1]["said"][0] == "no topic `battery_status` in this log"
@@ -315,7 +313,7 @@ def test_to_parquet_writes_what_ulog_parquet_writes(tmp_path):
     assert short[0]["ok"] and short[0]["skipped"]["damaged_bytes"] == 37
     assert short[0]["skipped"]["ignored_appended_offsets"] == []
     # A log with appended data, cut before it: the appended data that is not read is said.
-    appended = (good.parent / "sample_appended_multiple.ulg").read_bytes()
+    appended = known_log("pyulog/sample_appended_multiple.ulg").read_bytes()
     assert appended[16 + 2] == ord("B")
     offsets = [o for o in struct.unpack_from("<3Q", appended, 16 + 3 + 16) if o]
     cut_at = min(offsets) - 1000
@@ -359,9 +357,9 @@ def test_pyarrow_reads_the_float_columns_statistics(tmp_path):
 
 
 def test_the_command_line_tool_ships_with_the_package():
-    from conftest import corpus_dir
+    from conftest import known_log
 
-    path = str(corpus_dir() / "pyulog" / "sample.ulg")
+    path = str(known_log("pyulog/sample.ulg"))
     run = subprocess.run([sys.executable, "-m", "ulog", "info", path], capture_output=True, text=True)
     assert run.returncode == 0 and "sys_name" in run.stdout, run.stderr
     run = subprocess.run([sys.executable, "-m", "ulog", "info", "/no/such.ulg"], capture_output=True, text=True)
@@ -436,9 +434,9 @@ def test_a_log_closes_at_the_end_of_a_with_block():
 
 
 def test_misused_arguments_are_clear_errors(tmp_path):
-    from conftest import corpus_dir
+    from conftest import known_log
 
-    path = corpus_dir() / "pyulog" / "sample_log_small.ulg"
+    path = known_log("pyulog/sample_log_small.ulg")
     log = ulog.open(path)
     for wrong in ["0", None, 0.0, True]:
         with pytest.raises(TypeError, match=f"multi_id must be an int, not {type(wrong).__name__}"):
@@ -479,7 +477,7 @@ def test_misused_arguments_are_clear_errors(tmp_path):
     again = pickle.loads(pickle.dumps(raised.value))
     assert (type(again), str(again), again.filename) == (ulog.ULogIOError, str(raised.value), "/dev/null")
     assert "(70 topic instances, 14604 rows)" in repr(log)
-    one = corpus_dir() / "yule_log" / "short_list.ulg"
+    one = known_log("yule_log/short_list.ulg")
     assert repr(ulog.open(one)).endswith("(1 topic instance, 10 rows)>")
     assert repr(ulog.open(one).table("list_data", columns="timestamp")) == "<ulog.Table list_data #0: 10 rows, 1 column>"
 

@@ -8,12 +8,50 @@ use std::path::{Path, PathBuf};
 use ulog_runtime::read::SYNC_MAGIC;
 use ulog_runtime::{DiagnosticKind, Log};
 
-/// The corpus folder.
+/// The corpus folder: `ULOG_CORPUS`, else the project's corpus ([`project_corpus_dir`]).
 pub fn corpus_dir() -> PathBuf {
     match std::env::var_os("ULOG_CORPUS") {
         Some(dir) => PathBuf::from(dir),
-        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/testdata/ulog"),
+        None => project_corpus_dir(),
     }
+}
+
+/// The project's corpus, `../shared/testdata/ulog` beside the checkout: real logs from
+/// public projects with their pyulog oracles, `oracle.py`, and pyulog's expected tool
+/// outputs for its own sample logs.
+pub fn project_corpus_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/testdata/ulog")
+}
+
+/// Whether the corpus is the project's (`ULOG_CORPUS` unset, or naming that folder). The
+/// tests' counts of what the corpus holds (a topic in at least so many logs, so many rows
+/// of one topic) are the project corpus's: another folder is checked log by log, without
+/// them.
+pub fn is_project_corpus() -> bool {
+    let canonical = |p: PathBuf| std::fs::canonicalize(&p).unwrap_or(p);
+    canonical(corpus_dir()) == canonical(project_corpus_dir())
+}
+
+/// A file of the project's corpus whose known facts a test checks (`pyulog/sample.ulg` and
+/// pyulog's `sample_params.txt` for it, `oracle.py`): from `ULOG_CORPUS` when it holds the
+/// file, else from the project's corpus, so that a folder of other logs named by
+/// `ULOG_CORPUS` leaves these tests checking what they check. `None` when neither holds it,
+/// with a note on stderr, outside CI only: under CI that panics, naming the file.
+pub fn fixture(name: &str) -> Option<PathBuf> {
+    let found = [corpus_dir(), project_corpus_dir()]
+        .into_iter()
+        .map(|dir| dir.join(name))
+        .find(|p| p.exists());
+    if found.is_none() {
+        let msg = format!(
+            "{name} is in neither {} nor {} (set ULOG_CORPUS)",
+            corpus_dir().display(),
+            project_corpus_dir().display()
+        );
+        assert!(!under_ci(), "{msg}");
+        eprintln!("note: {msg}; the test that needs it has nothing to check");
+    }
+    found
 }
 
 /// Whether the tests run under CI, where nothing may be skipped.

@@ -8,7 +8,10 @@ pub mod corpus;
 pub mod files;
 pub mod typed_check;
 
-pub use corpus::{corpus_dir, corpus_files, oracle, pyulog_blind_ranges, short_name, under_ci};
+pub use corpus::{
+    corpus_dir, corpus_files, fixture, is_project_corpus, oracle, pyulog_blind_ranges, short_name,
+    under_ci,
+};
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -102,7 +105,7 @@ fn u64s(j: &Json) -> Vec<u64> {
 /// pyulog's view of `path` through the corpus's `oracle.py` (written beside it as
 /// `PATH.oracle.json`), if pyulog and the script are here.
 pub fn pyulog_view(path: &Path) -> Option<Json> {
-    let script = corpus_dir().join("oracle.py");
+    let script = fixture("oracle.py")?;
     let ok = std::process::Command::new("python3")
         .arg(&script)
         .arg(path)

@@ -23,7 +23,7 @@ mod pyulog_tools;
 #[path = "cli/report.rs"]
 mod report;
 
-use corpus::{corpus_dir, corpus_files, pyulog_blind_ranges, short_name, under_ci};
+use corpus::{corpus_files, fixture, pyulog_blind_ranges, short_name, under_ci};
 
 fn ulog(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_ulog"))
@@ -212,11 +212,9 @@ fn csv_equals_ulog2csv_on_every_corpus_file() {
 
 #[test]
 fn csv_options_select_topics_time_and_delimiter() {
-    let path = corpus_dir().join("pyulog/sample_log_small.ulg");
-    if !path.exists() {
-        assert!(!under_ci(), "corpus missing");
+    let Some(path) = fixture("pyulog/sample_log_small.ulg") else {
         return;
-    }
+    };
     let dir = temp_dir("options");
     let log = ulog_runtime::Log::open(&path).unwrap();
     let first = log
@@ -295,13 +293,13 @@ fn csv_options_select_topics_time_and_delimiter() {
 
 #[test]
 fn params_equal_ulog_params_output() {
-    let dir = corpus_dir().join("pyulog");
-    let expected = dir.join("sample_params.txt");
-    if !expected.exists() {
-        assert!(!under_ci(), "corpus missing");
+    let (Some(expected), Some(log)) = (
+        fixture("pyulog/sample_params.txt"),
+        fixture("pyulog/sample.ulg"),
+    ) else {
         return;
-    }
-    let ours = stdout(&["params", dir.join("sample.ulg").to_str().unwrap()]);
+    };
+    let ours = stdout(&["params", log.to_str().unwrap()]);
     assert_eq!(ours, std::fs::read_to_string(expected).unwrap());
 }
 
@@ -309,24 +307,22 @@ fn params_equal_ulog_params_output() {
 /// instance the message size, row count and bytes.
 #[test]
 fn info_carries_the_facts_of_ulog_info() {
-    let dir = corpus_dir().join("pyulog");
     let mut checked = 0;
     for stem in ["sample", "sample_appended_multiple"] {
-        let Ok(expected) = std::fs::read_to_string(dir.join(format!("{stem}_info.txt"))) else {
-            assert!(!under_ci(), "corpus missing");
+        let (Some(expected), Some(log)) = (
+            fixture(&format!("pyulog/{stem}_info.txt")),
+            fixture(&format!("pyulog/{stem}.ulg")),
+        ) else {
             continue;
         };
+        let expected = std::fs::read_to_string(expected).unwrap();
         // pyulog shows perf_* info only with -v.
         let verbose = if expected.contains(" perf_") {
             "-v"
         } else {
             "--"
         };
-        let ours = stdout(&[
-            "info",
-            verbose,
-            dir.join(format!("{stem}.ulg")).to_str().unwrap(),
-        ]);
+        let ours = stdout(&["info", verbose, log.to_str().unwrap()]);
         let mut lines = expected.lines();
         let first = lines.next().unwrap(); // Logging start time: 0:01:52, duration: 0:01:08
         let (start, duration) = first
@@ -821,13 +817,15 @@ fn msg_root() -> PathBuf {
 #[test]
 fn check_msg_says_whether_a_folder_makes_a_logs_formats() {
     let root = msg_root();
-    let quad = corpus_dir().join("px4-ulog-rs/quadrotor_local.ulg");
+    let Some(quad) = fixture("px4-ulog-rs/quadrotor_local.ulg") else {
+        return;
+    };
     let (same, other) = (
         root.join("392e831c1f659429ca83902e66820d7094591410/msg"),
         root.join("6c5a8e74eb2d173c0decb3feacd7e1932b64095b/msg"),
     );
-    if !same.exists() || !quad.exists() {
-        assert!(!under_ci(), "the .msg snapshots and the corpus are needed");
+    if !same.exists() {
+        assert!(!under_ci(), "the .msg snapshots are needed");
         return;
     }
     let (q, s, o) = (
@@ -934,11 +932,9 @@ fn codegen_from_several_logs_and_msg_folders() {
 fn a_closed_output_pipe_is_not_an_error() {
     use std::io::Read;
     // Megabytes of output: far more than a pipe buffers.
-    let path = corpus_dir().join("pyulog/sample_log_small.ulg");
-    if !path.exists() {
-        assert!(!under_ci(), "corpus missing");
+    let Some(path) = fixture("pyulog/sample_log_small.ulg") else {
         return;
-    }
+    };
     let mut child = Command::new(env!("CARGO_BIN_EXE_ulog"))
         .args(["json", path.to_str().unwrap()])
         .stdout(std::process::Stdio::piped())

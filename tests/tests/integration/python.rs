@@ -1,8 +1,8 @@
 //! The Python package's tests (`python/tests`, pytest) as part of `cargo test`: a virtual
 //! environment made once under `target/` with the pins of `python/requirements-test.txt`
 //! (or the Python given by `ULOG_PYTHON`, which `.ci/run` makes), the package's native
-//! module the one `cargo test --workspace` built (`target/<profile>/lib_ulog.so`, built
-//! here with `cargo build -p ulog-python` when it is missing) beside its Python sources,
+//! module `target/<profile>/lib_ulog.so` (made or brought up to date here with `cargo
+//! build -p ulog-python`) beside its Python sources,
 //! then pytest over every test file: pyulog side by side on the corpus, pyulog's own test
 //! suite, the native API, bad input; and beside them, in a second pytest process, Spark
 //! (when Java is there).
@@ -77,15 +77,18 @@ fn python(target: &Path) -> Result<PathBuf, String> {
 /// The package laid out for import: its Python sources and the native module cargo built.
 fn package(target: &Path, profile_dir: &Path) -> Result<PathBuf, String> {
     let lib = profile_dir.join("lib_ulog.so");
-    if !lib.exists() {
-        let built = Command::new(env!("CARGO"))
-            .args(["build", "-p", "ulog-python"])
-            .current_dir(root())
-            .status()
-            .map_err(|e| e.to_string())?;
-        if !built.success() || !lib.exists() {
-            return Err(format!("no {} (cargo build -p ulog-python)", lib.display()));
-        }
+    // Built every time (nothing to do when it is up to date): `cargo test` builds the
+    // crate's test harness, not its `cdylib`, so a module built before a change would
+    // otherwise be tested in its place.
+    let release = profile_dir.file_name().is_some_and(|p| p == "release");
+    let built = Command::new(env!("CARGO"))
+        .args(["build", "-p", "ulog-python"])
+        .args(release.then_some("--release"))
+        .current_dir(root())
+        .status()
+        .map_err(|e| e.to_string())?;
+    if !built.success() || !lib.exists() {
+        return Err(format!("no {} (cargo build -p ulog-python)", lib.display()));
     }
     let site = target.join("python-package");
     let pkg = site.join("ulog");
