@@ -168,12 +168,23 @@ impl Log {
     }
 
     /// The logged messages and PX4 events as `ulog messages` lists them:
-    /// `(timestamp µs, level, text)`.
-    fn messages<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
-        let m = ulog_runtime::events::messages(&self.log);
+    /// `(timestamp µs, level, text)`; with `tagged`, also the tagged strings (`C`
+    /// messages, which `ulog_messages` leaves out), their text as `[tag N] text`.
+    #[pyo3(signature = (tagged = false))]
+    fn messages<'py>(&self, py: Python<'py>, tagged: bool) -> PyResult<Bound<'py, PyList>> {
+        let m = if tagged {
+            ulog_runtime::events::all_messages(&self.log)
+        } else {
+            ulog_runtime::events::messages(&self.log)
+        };
         let out = PyList::empty(py);
         for l in &m.lines {
-            out.append((l.timestamp, l.level, &l.text))?;
+            match l.kind {
+                ulog_runtime::events::MessageKind::Tagged(t) => {
+                    out.append((l.timestamp, l.level, format!("[tag {t}] {}", l.text)))?
+                }
+                _ => out.append((l.timestamp, l.level, &l.text))?,
+            }
         }
         Ok(out)
     }

@@ -15,6 +15,17 @@ import sys
 import traceback
 
 import pyulog.core
+import pyulog.px4_events
+
+
+def _offline(_already_has_default_parser):
+    """For a PX4 log with events but no events metadata of its own, pyulog downloads PX4's
+    current definitions: the tests never do, so that pyulog's output does not depend on the
+    network (or on what PX4 publishes that day)."""
+    raise OSError('offline: the tests do not download event definitions')
+
+
+pyulog.px4_events.PX4Events._get_default_json_definitions = staticmethod(_offline)  # pylint: disable=protected-access
 
 _REAL_ULOG = pyulog.core.ULog
 _CACHE = {}

@@ -483,6 +483,7 @@ fn human_output_snapshots() {
         ("params_defaults.txt", vec!["params", "-d", "system", log]),
         ("params_changed.txt", vec!["params", "--changed", log]),
         ("messages.txt", vec!["messages", log]),
+        ("messages_tagged.txt", vec!["messages", "--tagged", log]),
     ] {
         // The file's path differs per run.
         let got = stdout(&args).replace(log, "snapshot.ulg");

@@ -174,10 +174,12 @@ class Log:
         """What recovery skipped or found odd: ``(byte offset, what)``."""
         return self._native.diagnostics
 
-    def messages(self) -> List[tuple]:
+    def messages(self, tagged: bool = False) -> List[tuple]:
         """Logged strings and PX4 events as ``ulog messages`` lists them:
-        ``(timestamp µs, level, text)``."""
-        return self._native.messages()
+        ``(timestamp µs, level, text)``; with ``tagged``, also the tagged strings (``C``
+        messages, which pyulog's ``ulog_messages`` leaves out), their text as
+        ``[tag N] text``, as ``ulog messages --tagged`` lists them."""
+        return self._native.messages(tagged)
 
     def events(self) -> List[Dict[str, Any]]:
         """PX4 events decoded with the metadata the log embeds."""

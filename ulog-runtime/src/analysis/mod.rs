@@ -214,7 +214,7 @@ pub struct GpsQuality {
     pub min_satellites: Option<u32>,
     /// Most satellites used.
     pub max_satellites: Option<u32>,
-    /// Largest horizontal dilution of precision.
+    /// Largest horizontal dilution of precision (over rows with a 3-D fix).
     pub max_hdop: Option<f64>,
     /// Largest horizontal position accuracy, m (over rows with a 3-D fix).
     pub max_eph_m: Option<f64>,

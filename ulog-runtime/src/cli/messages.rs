@@ -1,15 +1,15 @@
 //! `ulog messages`: logged strings and PX4 events as pyulog's `ulog_messages` prints them,
-//! over `events::messages`.
+//! over `events::messages` (`events::all_messages` with `--tagged`).
 
 use std::io::Write;
 use std::path::PathBuf;
 
-use crate::events::{MessageKind, MessageLine, messages};
+use crate::events::{MessageKind, MessageLine, all_messages, messages};
 use serde::Serialize;
 
 use crate::cli::Failure;
 
-/// `ulog messages FILE [-i] [--json]`.
+/// `ulog messages FILE [-i] [--json] [--tagged]`.
 #[derive(clap::Args)]
 pub(crate) struct Args {
     /// The log.
@@ -22,13 +22,21 @@ pub(crate) struct Args {
     /// as `ulog: warning: FILE: ...`).
     #[arg(long)]
     json: bool,
+    /// Also the tagged strings (`C` messages), as `[tag N] text` among the others, which
+    /// `ulog_messages` leaves out.
+    #[arg(long)]
+    tagged: bool,
 }
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     let log = crate::cli::open(&args.file)?;
     crate::cli::check_utf8(&log, &args.file, args.ignore, "-i")?;
     crate::cli::report_damage(&log, &args.file);
-    let m = messages(&log);
+    let m = if args.tagged {
+        all_messages(&log)
+    } else {
+        messages(&log)
+    };
     for note in &m.notes {
         eprintln!("ulog: {}: {note}", args.file.display());
     }

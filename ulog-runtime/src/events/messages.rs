@@ -100,17 +100,33 @@ fn level_name(m: &LoggedMessage) -> &'static str {
 ///
 /// Where pyulog stops listing events (an event whose message cannot be formatted, or whose
 /// argument type the metadata lacks, ends the list there), so does this, and
-/// [`Messages::notes`] says why. Two differences, both for what pyulog cannot show: tagged
-/// strings (`C` messages) are listed with the logged ones as `[tag N] text` (pyulog leaves
-/// them out), and an event whose arguments are cut short ends the list with a note (pyulog
-/// stops with a Python error).
+/// [`Messages::notes`] says why. One difference, where pyulog cannot go on: an event whose
+/// arguments are cut short ends the list with a note (pyulog stops with a Python error).
+/// And one where pyulog reaches out: for a PX4 log with events but no events metadata of
+/// its own, pyulog downloads PX4's current definitions from the network (and prints its
+/// download error without one); this reader never does, and says the log has none.
+///
+/// Tagged strings (`C` messages) are not among them, as pyulog leaves them out:
+/// [`all_messages`] lists them too.
 pub fn messages(log: &Log<'_>) -> Messages {
+    listed(log, false)
+}
+
+/// [`messages`] and, among the logged strings, the tagged ones (`C` messages, which
+/// `ulog_messages` leaves out), each as `[tag N] text` ([`MessageKind::Tagged`]).
+pub fn all_messages(log: &Log<'_>) -> Messages {
+    listed(log, true)
+}
+
+fn listed(log: &Log<'_>, tagged: bool) -> Messages {
     let mut out = Messages {
         warnings: crate::tools::pyulog_warnings(log),
         ..Messages::default()
     };
     let meta = log.metadata();
-    let strings = log.logged_messages().iter().map(|m| MessageLine {
+    let strings = log.logged_messages().iter();
+    let strings = strings.filter(|m| tagged || m.tag.is_none());
+    let strings = strings.map(|m| MessageLine {
         timestamp: m.timestamp,
         level: level_name(m),
         text: m.text.clone(),

@@ -38,7 +38,7 @@ mod tests;
 
 pub use definitions::{ArgDef, DefinitionsError, EnumDef, EventDef, EventDefinitions};
 pub use format::{ArgValue, FormatError, format_message};
-pub use messages::{MessageKind, MessageLine, Messages, messages};
+pub use messages::{MessageKind, MessageLine, Messages, all_messages, messages};
 pub use metadata::{EventsMetadata, MetadataError, Verification};
 
 use crate::read::{Log, Row};

@@ -569,3 +569,34 @@ fn a_stream_decodes_the_same_events_as_the_whole_file() {
     assert_eq!(messages, expected);
     assert_eq!(messages[0], Ok(Ok("Armed by 7".to_owned())));
 }
+
+#[test]
+fn tagged_strings_are_listed_only_when_asked_for() {
+    use crate::{Value, Writer, WriterOptions};
+    for sys_name in ["PX4", "other"] {
+        let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+        w.info("sys_name", &Value::String(sys_name.into())).unwrap();
+        w.log(b'6', 1_000, "plain").unwrap();
+        w.log_tagged(b'4', 3, 2_000, "tagged").unwrap();
+        w.log(b'3', 3_000, "later").unwrap();
+        let log = Log::from_vec(w.into_inner()).unwrap();
+        let lines =
+            |m: Messages| -> Vec<String> { m.lines.iter().map(MessageLine::pyulog_line).collect() };
+        // As ulog_messages prints them: pyulog lists `L` messages only.
+        assert_eq!(
+            lines(messages(&log)),
+            ["0:00:00.001 INFO: plain", "0:00:00.003 ERROR: later"],
+            "{sys_name}"
+        );
+        assert_eq!(
+            lines(all_messages(&log)),
+            [
+                "0:00:00.001 INFO: plain",
+                "0:00:00.002 WARNING: [tag 3] tagged",
+                "0:00:00.003 ERROR: later"
+            ],
+            "{sys_name}"
+        );
+        assert_eq!(all_messages(&log).lines[1].kind, MessageKind::Tagged(3));
+    }
+}
