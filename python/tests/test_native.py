@@ -183,6 +183,20 @@ def test_polars_duckdb_and_pandas_take_a_table():
         log.table("vehicle_atitude", 300)
 
 
+def test_tagged_strings_are_listed_when_asked_for():
+    # A log made by hand (the spec's `L` and `C` messages): ulog_messages lists the logged
+    # string only; `tagged=True` adds the tagged one, as `ulog messages --tagged` does.
+    def msg(kind, body):
+        return struct.pack("<HB", len(body), ord(kind)) + body
+
+    data = b"ULog\x01\x12\x35\x01" + struct.pack("<Q", 0)
+    data += msg("L", struct.pack("<BQ", ord("6"), 1000) + b"plain")
+    data += msg("C", struct.pack("<BHQ", ord("4"), 3, 2000) + b"tagged")
+    log = ulog.open(data)
+    assert log.messages() == [(1000, "INFO", "plain")]
+    assert log.messages(tagged=True) == [(1000, "INFO", "plain"), (2000, "WARNING", "[tag 3] tagged")]
+
+
 def test_the_log_says_what_the_reader_read():
     from conftest import known_log
 
