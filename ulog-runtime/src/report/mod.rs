@@ -229,11 +229,12 @@ impl Plots<'_> {
             self.lack("Flight modes", "the log has no vehicle_status rows");
             return Ok(());
         }
-        let end = log
-            .data()
-            .last()
-            .map_or(0.0, |r| (r.timestamp as f64 - self.t0 as f64) / 1e6);
-        let start = self.bands.first().map_or(0.0, |b| b.start_s).min(0.0);
+        let secs = |r: crate::Row<'_>| (r.timestamp as f64 - self.t0 as f64) / 1e6;
+        let end = log.data().next_back().map_or(0.0, secs);
+        // The span of the log's rows, as the time plots show it (not from boot: a log that
+        // starts an hour after boot would squeeze its modes to the right edge).
+        let first = log.data().next().map_or(f64::INFINITY, secs);
+        let start = self.bands.first().map_or(0.0, |b| b.start_s).min(first);
         let svg = plot::mode_timeline(
             &self.bands,
             start,
@@ -640,6 +641,33 @@ fn capitalized(s: &str) -> String {
 mod tests {
     use super::*;
     use crate::analysis::tests::{Faults, flight};
+
+    #[test]
+    fn the_mode_timeline_spans_the_logs_rows_not_the_time_since_boot() {
+        // A log that starts an hour after boot, as a log started on arming does.
+        let mut w = crate::Writer::new(Vec::new(), crate::WriterOptions::default()).unwrap();
+        w.format("vehicle_status:uint64_t timestamp;uint8_t nav_state;uint8_t arming_state;")
+            .unwrap();
+        let sub = w.subscribe("vehicle_status", 0).unwrap();
+        for (k, nav) in [(0u64, 2u8), (5, 3), (10, 3)] {
+            let mut row = (3_600_000_000 + k * 1_000_000).to_le_bytes().to_vec();
+            row.extend([nav, 2]);
+            w.data(sub, &row).unwrap();
+        }
+        let log = Log::from_vec(w.into_inner()).unwrap();
+        let r = Report::of_log(&log, "late.ulg").unwrap();
+        let modes = &r.plots.iter().find(|p| p.id == "modes").unwrap().svg;
+        // The x axis' tick labels: every one within the rows' 3600 to 3610 s.
+        let ticks: Vec<f64> = modes
+            .split("<text")
+            .filter_map(|t| t.split('>').nth(1)?.split('<').next()?.trim().parse().ok())
+            .collect();
+        assert!(ticks.len() >= 3, "{modes}");
+        assert!(
+            ticks.iter().all(|t| (3600.0..=3610.0).contains(t)),
+            "{ticks:?}"
+        );
+    }
 
     #[test]
     fn a_flight_gives_its_plots_and_says_which_it_cannot() {
