@@ -41,7 +41,8 @@ enum Command {
     Info(info::Args),
     /// Parameters as pyulog's `ulog_params` writes them: `NAME,initial[,change...]`.
     Params(params::Args),
-    /// Logged and tagged strings with time and level.
+    /// Logged strings and PX4 events as pyulog's `ulog_messages` prints them (tagged strings
+    /// with `--tagged`).
     Messages(messages::Args),
     /// One CSV per subscription, `<stem>_<topic>_<multi_id>.csv`, as pyulog's `ulog2csv`.
     Csv(csv::Args),

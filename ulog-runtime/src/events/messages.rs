@@ -106,6 +106,10 @@ fn level_name(m: &LoggedMessage) -> &'static str {
 /// its own, pyulog downloads PX4's current definitions from the network (and prints its
 /// download error without one); this reader never does, and says the log has none.
 ///
+/// When the events cannot be shown (no usable metadata or event rows), the logged strings
+/// ending in a tab, left out as pyulog leaves them out, show nowhere: [`Messages::notes`]
+/// says how many.
+///
 /// Tagged strings (`C` messages) are not among them, as pyulog leaves them out:
 /// [`all_messages`] lists them too.
 pub fn messages(log: &Log<'_>) -> Messages {
@@ -141,8 +145,25 @@ fn listed(log: &Log<'_>, tagged: bool) -> Messages {
         out.lines = strings;
         return out;
     }
+    let (warnings, notes) = (out.warnings.len(), out.notes.len());
     let mut lines = px4_events(log, &mut out);
-    lines.extend(strings.into_iter().filter(|m| !m.text.ends_with('\t')));
+    // No usable metadata (a warning), or no usable event rows.
+    let undecoded = out.warnings.len() > warnings
+        || out.notes[notes..]
+            .iter()
+            .any(|n| n.starts_with("events not shown"));
+    let (copies, strings): (Vec<MessageLine>, Vec<MessageLine>) =
+        strings.into_iter().partition(|m| m.text.ends_with('\t'));
+    if undecoded && !copies.is_empty() {
+        out.notes.push(format!(
+            "{} logged string{} ending in a tab left out, as pyulog leaves them out (PX4 logs \
+             each beside an event that says the same), though the events could not be shown; \
+             `ulog json --document` lists them",
+            copies.len(),
+            if copies.len() == 1 { "" } else { "s" }
+        ));
+    }
+    lines.extend(strings);
     // Stable: events before strings at equal times, each in its order.
     lines.sort_by_key(|m| m.timestamp);
     out.lines = lines;

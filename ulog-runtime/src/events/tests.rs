@@ -510,6 +510,15 @@ fn without_usable_metadata_the_rows_stay_and_the_reason_is_given() {
         m.warnings
     );
     assert_eq!(m.lines.len(), 2, "the logged strings still");
+    // The string that duplicates an event is left out as pyulog leaves it out, and said,
+    // since no event shows what it said.
+    assert!(
+        m.notes
+            .iter()
+            .any(|n| n.starts_with("1 logged string ending in a tab left out")),
+        "{:?}",
+        m.notes
+    );
 }
 
 #[test]
