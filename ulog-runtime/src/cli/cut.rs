@@ -57,6 +57,11 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         .run_file(&args.file, &args.output)
         .map_err(|e| crate::cli::rewrite_failure(&args.file, e))?;
     // A window no row of the topics kept lies in is said by the report itself
-    // (`Report::window_missed`), with where their rows lie.
-    crate::cli::report_rewrite(&report, &args.output, out)
+    // (`Report::window_missed`), with where their rows lie, and on stderr as `csv` and
+    // `parquet` say it, so that an output with no rows is never quiet.
+    crate::cli::report_rewrite(&report, &args.output, out)?;
+    if let Some(span) = report.window_missed() {
+        crate::cli::report_empty_window(&args.file, &window, Some(span));
+    }
+    Ok(())
 }
