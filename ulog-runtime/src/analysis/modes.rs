@@ -172,6 +172,8 @@ impl Modes {
 }
 
 fn segment(mode: u8, start: u64, end: u64) -> ModeSegment {
+    // A damaged log's time may run back: such a segment lasts no time, not 585,000 years.
+    let end = end.max(start);
     ModeSegment {
         mode: mode_name(mode).to_owned(),
         mode_id: mode,

@@ -265,7 +265,8 @@ impl Sensors {
                 }
                 if let Some((leaves, deg, m)) = position
                     && fix.is_none_or(|f| f >= 3)
-                    && g.last_point.is_none_or(|last| t >= last + 1_000_000)
+                    && g.last_point
+                        .is_none_or(|last| t >= last.saturating_add(1_000_000))
                     && let (Some(lat), Some(lon), Some(alt)) = (
                         leaves[0].f64(data),
                         leaves[1].f64(data),

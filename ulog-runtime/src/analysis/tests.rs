@@ -853,6 +853,44 @@ fn a_nav_state_that_is_not_a_byte_is_an_unknown_mode() {
     assert_eq!(names, ["Unknown", "Mission"]);
 }
 
+/// A damaged log whose time runs back: no mode segment lasts longer than the log, and no
+/// episode of a diagnostic ends before it begins (the fuzzer's log gave a "Manual" segment
+/// of 18,446,744,073,689 s in a release build, and a panic in a debug one).
+#[test]
+fn time_that_runs_back_gives_no_segment_longer_than_the_log() {
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    w.format("vehicle_status:uint64_t timestamp;uint8_t nav_state;uint8_t arming_state;")
+        .unwrap();
+    w.format("input_rc:uint64_t timestamp;bool rc_lost;").unwrap();
+    let status = w.subscribe("vehicle_status", 0).unwrap();
+    let rc = w.subscribe("input_rc", 0).unwrap();
+    // Armed, a mode change, then time back to before the first row; the RC lost meanwhile.
+    for (t, nav, lost) in [
+        (20_000_000u64, 0u8, false),
+        (21_000_000, 0, true),
+        (22_000_000, 3, true),
+        (1_000, 2, false),
+        (2_000, 2, false),
+    ] {
+        let mut row = t.to_le_bytes().to_vec();
+        row.extend([nav, 2]);
+        w.data(status, &row).unwrap();
+        let mut row = t.to_le_bytes().to_vec();
+        row.push(u8::from(lost));
+        w.data(rc, &row).unwrap();
+    }
+    let bytes = w.into_inner();
+    let a = Analysis::of_log(&Log::from_slice(&bytes).unwrap());
+    assert!(!a.flight_modes.is_empty());
+    for m in &a.flight_modes {
+        assert!(m.end_us >= m.start_us, "{m:?}");
+        assert!(m.duration_s <= 22.0, "{m:?}");
+    }
+    for d in &a.diagnostics {
+        assert!(d.end_timestamp_us.is_none_or(|e| e >= d.timestamp_us), "{d:?}");
+    }
+}
+
 /// Field statistics stop at `MAX_FIELDS` fields, the instances past it said in `missing`:
 /// a 30-byte definition (`uint8_t[65000]`) in many instances cannot take gigabytes.
 #[test]

@@ -215,7 +215,8 @@ impl Episode {
             }
             (false, Some(start)) => {
                 self.since = None;
-                Some((start, t))
+                // Time that ran back (a damaged log) ends the episode where it began.
+                Some((start, t.max(start)))
             }
             (false, None) => None,
         }
@@ -223,7 +224,7 @@ impl Episode {
 
     /// The episode still open at the end of the log.
     pub(crate) fn close(&mut self, end: u64) -> Option<(u64, u64)> {
-        self.since.take().map(|s| (s, end.max(self.last)))
+        self.since.take().map(|s| (s, end.max(self.last).max(s)))
     }
 }
 

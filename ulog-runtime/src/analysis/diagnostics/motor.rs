@@ -198,7 +198,7 @@ impl Motors {
                     } else {
                         LOCKED_US
                     };
-                    if c.last >= start + min {
+                    if c.last >= start.saturating_add(min) {
                         self.found
                             .push((f.multi_id, k, kind, start, c.last, mode, value, median));
                     }
@@ -219,7 +219,7 @@ impl Motors {
                     } else {
                         LOCKED_US
                     };
-                    if c.last >= start + min {
+                    if c.last >= start.saturating_add(min) {
                         self.found
                             .push((*m, k, kind, start, c.last, mode, value, median));
                     }
@@ -231,9 +231,9 @@ impl Motors {
             .into_iter()
             // Not the end of a flight: no stop shortly after the episode began.
             .filter(|f| {
-                !stops
-                    .iter()
-                    .any(|&s| s + 100_000 >= f.3 && s <= f.3 + STOP_MARGIN_US)
+                !stops.iter().any(|&s| {
+                    s.saturating_add(100_000) >= f.3 && s <= f.3.saturating_add(STOP_MARGIN_US)
+                })
             })
             .map(|(multi_id, k, kind, start, end, mode, value, median)| {
                 let (what, failure) = match kind {

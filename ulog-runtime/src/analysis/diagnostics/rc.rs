@@ -57,7 +57,7 @@ impl RcLoss {
         match (losing, l.since) {
             (true, None) => l.since = Some(t),
             (false, Some(start)) => {
-                if t - start >= MIN_DURATION_US {
+                if t.saturating_sub(start) >= MIN_DURATION_US {
                     self.found
                         .push((f.multi_id, start, t, l.last_signal.unwrap_or(start)));
                 }
@@ -75,7 +75,7 @@ impl RcLoss {
         for (m, l) in &self.links {
             if let Some(start) = l.since {
                 let stop = end.max(l.last);
-                if stop - start >= MIN_DURATION_US {
+                if stop.saturating_sub(start) >= MIN_DURATION_US {
                     self.found
                         .push((*m, start, stop, l.last_signal.unwrap_or(start)));
                 }
