@@ -861,7 +861,8 @@ fn time_that_runs_back_gives_no_segment_longer_than_the_log() {
     let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
     w.format("vehicle_status:uint64_t timestamp;uint8_t nav_state;uint8_t arming_state;")
         .unwrap();
-    w.format("input_rc:uint64_t timestamp;bool rc_lost;").unwrap();
+    w.format("input_rc:uint64_t timestamp;bool rc_lost;")
+        .unwrap();
     let status = w.subscribe("vehicle_status", 0).unwrap();
     let rc = w.subscribe("input_rc", 0).unwrap();
     // Armed, a mode change, then time back to before the first row; the RC lost meanwhile.
@@ -887,7 +888,10 @@ fn time_that_runs_back_gives_no_segment_longer_than_the_log() {
         assert!(m.duration_s <= 22.0, "{m:?}");
     }
     for d in &a.diagnostics {
-        assert!(d.end_timestamp_us.is_none_or(|e| e >= d.timestamp_us), "{d:?}");
+        assert!(
+            d.end_timestamp_us.is_none_or(|e| e >= d.timestamp_us),
+            "{d:?}"
+        );
     }
 }
 
