@@ -218,9 +218,10 @@ pub(crate) fn column_count(schema: &Schema, id: FormatId) -> usize {
 #[derive(Debug, Clone, Default)]
 pub(crate) struct ColumnBudget {
     used: usize,
+    /// The instances left out (topic, `multi_id`), each once.
     rejected: std::collections::HashSet<(String, u8)>,
-    /// `` `topic` #m (n columns) ``, in the order they were left out.
-    left_out: Vec<String>,
+    /// Those instances with their columns, in the order they were left out.
+    left_out: Vec<(String, u8, usize)>,
 }
 
 impl ColumnBudget {
@@ -237,17 +238,21 @@ impl ColumnBudget {
             self.used += columns;
             return true;
         }
-        if self.rejected.insert((topic.to_owned(), multi_id)) {
-            self.left_out
-                .push(format!("`{topic}` #{multi_id} ({columns} columns)"));
-        }
+        self.left_out_once(topic.to_owned(), multi_id, columns);
         false
     }
 
-    /// The instances another part of a walk left out, after these.
+    fn left_out_once(&mut self, topic: String, multi_id: u8, columns: usize) {
+        if self.rejected.insert((topic.clone(), multi_id)) {
+            self.left_out.push((topic, multi_id, columns));
+        }
+    }
+
+    /// The instances another part of a walk left out, after these (one both left out is
+    /// named once).
     pub(crate) fn append(&mut self, other: ColumnBudget) {
-        for name in other.left_out {
-            self.left_out.push(name);
+        for (topic, multi_id, columns) in other.left_out {
+            self.left_out_once(topic, multi_id, columns);
         }
     }
 
@@ -264,10 +269,33 @@ impl ColumnBudget {
             format!(
                 "{n} topic instance{} left out, their columns past the limit of {limit}: {}{more}",
                 if n == 1 { "" } else { "s" },
-                self.left_out[..shown].join(", ")
+                self.left_out[..shown]
+                    .iter()
+                    .map(|(t, m, c)| format!("`{t}` #{m} ({c} columns)"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
             )
         })
     }
+}
+
+#[cfg(test)]
+#[test]
+fn a_budget_names_each_instance_it_left_out_once() {
+    let mut a = ColumnBudget::default();
+    assert!(a.admit(10, "t", 0, 6));
+    assert!(!a.admit(10, "t", 1, 6));
+    assert!(!a.admit(10, "t", 1, 6), "resubscribed");
+    let mut b = ColumnBudget::default();
+    assert!(!b.admit(4, "t", 1, 6));
+    assert!(!b.admit(4, "u", 0, 5));
+    a.append(b);
+    assert_eq!(
+        a.said("10").unwrap(),
+        "2 topic instances left out, their columns past the limit of 10: `t` #1 (6 columns), \
+         `u` #0 (5 columns)"
+    );
+    assert_eq!(ColumnBudget::default().said("10"), None);
 }
 
 /// Every leaf of a format: (name, kind, ULog type, offset), depth first; `char` arrays as
