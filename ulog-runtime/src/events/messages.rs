@@ -145,13 +145,9 @@ fn listed(log: &Log<'_>, tagged: bool) -> Messages {
         out.lines = strings;
         return out;
     }
-    let (warnings, notes) = (out.warnings.len(), out.notes.len());
-    let mut lines = px4_events(log, &mut out);
-    // No usable metadata (a warning), or no usable event rows.
-    let undecoded = out.warnings.len() > warnings
-        || out.notes[notes..]
-            .iter()
-            .any(|n| n.starts_with("events not shown"));
+    let shown = px4_events(log, &mut out);
+    let undecoded = shown.is_none();
+    let mut lines = shown.unwrap_or_default();
     let (copies, strings): (Vec<MessageLine>, Vec<MessageLine>) =
         strings.into_iter().partition(|m| m.text.ends_with('\t'));
     if undecoded && !copies.is_empty() {
@@ -170,14 +166,16 @@ fn listed(log: &Log<'_>, tagged: bool) -> Messages {
     out
 }
 
-/// The events `ulog_messages` shows, in file order.
-fn px4_events(log: &Log<'_>, out: &mut Messages) -> Vec<MessageLine> {
+/// The events `ulog_messages` shows, in file order; `None` when they cannot be shown (the
+/// event rows unreadable, or no usable metadata for them).
+fn px4_events(log: &Log<'_>, out: &mut Messages) -> Option<Vec<MessageLine>> {
     let events = log.events();
     if let Some(e) = &events.layout_error {
         out.notes.push(format!("events not shown: {e}"));
+        return None;
     }
     if events.rows.is_empty() {
-        return Vec::new();
+        return Some(Vec::new());
     }
     let definitions = match &events.metadata {
         Ok(m) => {
@@ -191,7 +189,7 @@ fn px4_events(log: &Log<'_>, out: &mut Messages) -> Vec<MessageLine> {
         Err(e) => {
             out.warnings
                 .push(format!("Failed to get event parser: {e}"));
-            return Vec::new();
+            return None;
         }
     };
     let mut lines = Vec::new();
@@ -255,5 +253,5 @@ fn px4_events(log: &Log<'_>, out: &mut Messages) -> Vec<MessageLine> {
             },
         }
     }
-    lines
+    Some(lines)
 }
