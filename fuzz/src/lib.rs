@@ -911,8 +911,9 @@ pub fn parquet(data: &[u8]) {
 /// name) ends without a panic, and the reads agree. Each dataset holds whole rows; a
 /// header-only read holds no rows and the same formats; a read with strict strings, when it
 /// succeeds, equals the lenient one (no string was invalid); the filtered read of an intact
-/// log holds exactly the full read's datasets of that topic; the datasets of the rows this
-/// reader recovers hold whole rows too. (Not tried: a filter by substring, a base offset.)
+/// log that pyulog reads to its end holds exactly the full read's datasets of that topic;
+/// the datasets of the rows this reader recovers hold whole rows too. (Not tried: a filter
+/// by substring, a base offset.)
 pub fn pyulog_compat(data: &[u8]) {
     use ulog_runtime::compat::pyulog::{self, NameFilter, PyulogOptions};
     let whole_rows = |file: &pyulog::PyulogFile| {
@@ -954,9 +955,15 @@ pub fn pyulog_compat(data: &[u8]) {
         );
     }
     // On a damaged log pyulog's recovery itself keeps other rows when some topics are
-    // filtered out (checked against pyulog live: `tests/fuzz_regressions/pyulog_compat/`
-    // and python/tests/test_compat.py), so only an intact log is held to this.
-    if let Some(first) = full.data.first().filter(|_| !full.file_corrupt) {
+    // filtered out, and a read that a `struct.error` ended early (`stopped_at`) reads on
+    // when the row that raised it is filtered out (both checked against pyulog live:
+    // `tests/fuzz_regressions/pyulog_compat/` and python/tests/test_compat.py), so only
+    // an intact log read to its end is held to this.
+    if let Some(first) = full
+        .data
+        .first()
+        .filter(|_| !full.file_corrupt && full.stopped_at.is_none())
+    {
         let kept = first.name.clone();
         let filtered = PyulogOptions {
             filter: NameFilter::Names(vec![kept.clone()]),

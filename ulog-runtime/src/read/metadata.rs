@@ -332,10 +332,13 @@ impl Clock {
 pub(crate) enum Applied {
     Nothing,
     /// A subscription was added; `sizes` are its accepted row lengths if it can be decoded.
+    /// `diagnostic` is what stops it being read or timed; `duplicate` says its msg_id was
+    /// subscribed before (both can be said of one subscription).
     Subscribed {
         msg_id: u16,
         sizes: Option<(usize, usize)>,
         diagnostic: Option<Diagnostic>,
+        duplicate: Option<Diagnostic>,
     },
     Row {
         sub: usize,
@@ -751,6 +754,7 @@ impl Metadata {
                 }
             },
         }
+        let mut duplicate = None;
         if let Some(previous) = self.by_msg_id[usize::from(msg_id)].checked_sub(1) {
             if !self.is_resubscribed(msg_id) {
                 // Its first subscription joins the list, and rows of this id now look up
@@ -762,7 +766,7 @@ impl Metadata {
             self.resubscriptions
                 .push((msg_id, offset, self.subscriptions.len() as u32));
             let previous = previous as usize;
-            problem = Some(DiagnosticKind::DuplicateMsgId {
+            duplicate = Some(DiagnosticKind::DuplicateMsgId {
                 msg_id,
                 previous: self.subscriptions[previous].name.clone(),
                 topic: sub.name.clone(),
@@ -775,6 +779,7 @@ impl Metadata {
             msg_id,
             sizes,
             diagnostic: problem.map(|kind| Diagnostic { offset, kind }),
+            duplicate: duplicate.map(|kind| Diagnostic { offset, kind }),
         })
     }
 

@@ -211,7 +211,8 @@ impl Walker {
                 if let Applied::Subscribed {
                     msg_id,
                     sizes,
-                    diagnostic,
+                    duplicate,
+                    ..
                 } = &applied
                 {
                     let sub = self.meta.subscriptions.len() - 1;
@@ -220,10 +221,7 @@ impl Walker {
                         _ => None,
                     };
                     self.framer.subscribe(*msg_id, *sizes, sub, u64_timestamp);
-                    if diagnostic
-                        .as_ref()
-                        .is_some_and(|d| matches!(d.kind, DiagnosticKind::DuplicateMsgId { .. }))
-                    {
+                    if duplicate.is_some() {
                         self.epoch += 1;
                     }
                 }

@@ -71,6 +71,8 @@ pub struct StreamReader<R> {
     walker: Walker,
     /// A diagnostic to report before the next message (boxed: checked on every row).
     pending: Option<Box<Diagnostic>>,
+    /// A second one, reported after `pending` (a subscription can have two).
+    pending_next: Option<Box<Diagnostic>>,
     /// The message behind the last event: its offset, type and the range of its payload in
     /// `buf` (valid until the next read moves the window).
     last: Option<(u64, u8, std::ops::Range<usize>)>,
@@ -127,6 +129,7 @@ impl<R: Read> StreamReader<R> {
             win: Window::new(Reading(input), HEADER_LEN as u64),
             walker,
             pending,
+            pending_next: None,
             last: None,
         })
     }
@@ -384,6 +387,7 @@ impl<R: Read> StreamReader<R> {
     /// Moves to the next event, recording its message.
     fn advance(&mut self) -> Result<Option<Next>, ReadError> {
         if let Some(d) = self.pending.take() {
+            self.pending = self.pending_next.take();
             self.last = None;
             return Ok(Some(Next::Diagnostic(d)));
         }
@@ -448,8 +452,14 @@ impl<R: Read> StreamReader<R> {
                             Some(MessageType::Data) | None => continue,
                             Some(ty) => Next::Definition { offset, ty },
                         },
-                        Applied::Subscribed { diagnostic, .. } => {
-                            self.pending = diagnostic.map(Box::new);
+                        Applied::Subscribed {
+                            diagnostic,
+                            duplicate,
+                            ..
+                        } => {
+                            let mut notes = diagnostic.into_iter().chain(duplicate).map(Box::new);
+                            self.pending = notes.next();
+                            self.pending_next = notes.next();
                             Next::Subscription
                         }
                         Applied::Row { sub, timestamp } => Next::Row {

@@ -198,7 +198,13 @@ impl<S: RowSink> Collected<S> {
                         return Ok(Walked::Stopped);
                     }
                     Applied::Nothing => {}
-                    Applied::Subscribed { diagnostic, .. } => self.diagnostics.extend(diagnostic),
+                    Applied::Subscribed {
+                        diagnostic,
+                        duplicate,
+                        ..
+                    } => self
+                        .diagnostics
+                        .extend(diagnostic.into_iter().chain(duplicate)),
                     Applied::Row { sub, timestamp } => {
                         if walker.meta.subscriptions[sub].timestamp_type()
                             != Some(Primitive::UInt64)

@@ -179,6 +179,15 @@ pub struct PyulogFile {
     pub sync_seq_cnt: u64,
     /// What pyulog prints on stdout while reading, line by line.
     pub printed: Vec<String>,
+    /// Where pyulog stopped reading data before the end: the file offset of the first whole
+    /// message of a data section whose parsing raised `struct.error` (a row whose format
+    /// has no `timestamp` field, or a field that makes its offset run past the row; a
+    /// logged string shorter than its header). pyulog takes that error for the end of the
+    /// file, silently (`file_corruption` stays false), so the rows after it are missing
+    /// from its datasets (and the rows of a topic a name filter leaves out are never
+    /// parsed, so a filtered read can hold more). `None` when every data section was read
+    /// to its end. (Not one of pyulog's attributes: this reader's note of what it left out.)
+    pub stopped_at: Option<u64>,
 }
 
 /// Why pyulog's constructor raises.
@@ -648,7 +657,11 @@ impl<'a> Reader<'a> {
             match self.data_message(start, ty, body, &mut curr) {
                 Ok(()) => {}
                 Err(Raise::Fatal(e)) => return Err(e),
-                Err(Raise::Struct) => break,
+                Err(Raise::Struct) => {
+                    let at = self.options.base_offset + start as u64;
+                    self.f.stopped_at.get_or_insert(at);
+                    break;
+                }
                 Err(Raise::Corrupt) => {
                     if !self.f.file_corrupt {
                         self.print("File corruption detected while reading file data!");

@@ -116,12 +116,62 @@ fn a_message_too_short_for_its_unpack_ends_the_data_section_silently() {
     f.extend(msg(b'F', b"t:uint64_t timestamp;uint8_t x;"));
     f.extend(add(0, 1, "t"));
     f.extend(data(1, &row(2000, 1)));
+    let short = f.len() as u64;
     f.extend(msg(b'O', &[1, 0, 0]));
     f.extend(data(1, &row(3000, 2)));
     let p = parse(&f);
     assert_eq!(p.data[0].rows.len(), 9, "the rows after it are lost");
-    assert!(!p.file_corrupt, "and nothing says so");
+    assert!(!p.file_corrupt, "and nothing of pyulog's says so");
     assert!(p.dropouts.is_empty());
+    assert_eq!(p.stopped_at, Some(short), "where it stopped");
+    assert_eq!(
+        parse(&f[..short as usize]).stopped_at,
+        None,
+        "a log read to its end"
+    );
+}
+
+#[test]
+fn a_row_without_a_timestamp_ends_the_read_unless_its_topic_is_filtered_out() {
+    // pyulog unpacks a row's timestamp at the offset after every field when the format has
+    // no `timestamp`: past the row, a `struct.error`, the end of its reading. Filtered out,
+    // the row is never parsed, and the rows after it are read.
+    let mut f = header();
+    f.extend(msg(b'F', b"t:uint64_t timestamp;uint8_t x;"));
+    f.extend(msg(b'F', b"e:uint64_t time;uint8_t x;"));
+    f.extend(add(0, 1, "t"));
+    f.extend(add(0, 2, "e"));
+    f.extend(data(1, &row(2000, 1)));
+    let e_row = f.len() as u64;
+    f.extend(data(2, &row(2500, 9)));
+    f.extend(data(1, &row(3000, 2)));
+    let full = parse(&f);
+    assert_eq!(full.stopped_at, Some(e_row));
+    let rows = |p: &PyulogFile, name: &str| {
+        p.data
+            .iter()
+            .find(|d| d.name == name)
+            .map(|d| d.rows.clone())
+    };
+    assert_eq!(rows(&full, "t"), Some(row(2000, 1)));
+    assert_eq!(
+        rows(&full, "e"),
+        Some(row(2500, 9)),
+        "the row that raised is kept"
+    );
+    let filtered = read(
+        &f,
+        &PyulogOptions {
+            filter: NameFilter::Names(vec!["t".into()]),
+            ..PyulogOptions::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(filtered.stopped_at, None);
+    assert_eq!(
+        rows(&filtered, "t"),
+        Some([row(2000, 1), row(3000, 2)].concat())
+    );
 }
 
 #[test]

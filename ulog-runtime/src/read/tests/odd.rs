@@ -265,3 +265,54 @@ fn a_msg_id_given_to_another_topic_keeps_each_row_with_its_subscription() {
         ["msg_id 0 subscribed again (was `a`), now `b`"]
     );
 }
+
+#[test]
+fn a_msg_id_subscribed_again_to_a_topic_that_cannot_be_read_says_both() {
+    // Found by the rewrite fuzzer: the note of the msg_id subscribed again replaced the
+    // subscription's own (no format; no timestamp), so the topic left out was not said.
+    let mut f = File::v1(0);
+    f.msg(Message::Format(b"a:uint64_t timestamp;uint8_t x;"));
+    f.msg(Message::Format(b"e:uint64_t time;uint8_t x;"));
+    f.msg(Message::Subscribe {
+        multi_id: 0,
+        msg_id: 0,
+        name: b"a",
+    });
+    f.msg(Message::Subscribe {
+        multi_id: 0,
+        msg_id: 0,
+        name: b"nowhere",
+    });
+    f.msg(Message::Subscribe {
+        multi_id: 0,
+        msg_id: 0,
+        name: b"e",
+    });
+    f.msg(Message::Data {
+        msg_id: 0,
+        data: &[3, 0, 0, 0, 0, 0, 0, 0, 5],
+    });
+    let expected = [
+        "subscription `nowhere` (msg_id 0): no format named `nowhere`",
+        "msg_id 0 subscribed again (was `a`), now `nowhere`",
+        "topic `e` has no unsigned integer `timestamp` field; its rows get timestamp 0",
+        "msg_id 0 subscribed again (was `nowhere`), now `e`",
+    ];
+    let log = Log::from_slice(&f.0).unwrap();
+    assert_eq!(kinds(&log), expected);
+    assert_eq!(
+        crate::read::Skipped::of(log.diagnostics()).unreadable_topics,
+        [(
+            "nowhere".to_owned(),
+            0,
+            "no format named `nowhere`".to_owned()
+        )]
+    );
+    // The stream says the same, a byte at a time and all at once.
+    for chunk in [1, 4096] {
+        let (rows, diagnostics) = super::stream_rows(&f.0, chunk);
+        assert_eq!(rows.len(), 1);
+        let said: Vec<String> = diagnostics.iter().map(|d| d.kind.to_string()).collect();
+        assert_eq!(said, expected, "chunks of {chunk}");
+    }
+}
