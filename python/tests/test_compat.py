@@ -299,6 +299,33 @@ def test_a_filtered_read_is_pyulogs_where_pyulog_reads_more_rows_filtered(name, 
     assert differs, f"pyulog reads {name} alike with and without a filter"
 
 
+def test_recover_keeps_the_rows_after_a_row_pyulog_stops_at(capsys):
+    """A row of a format without `timestamp` ends pyulog's reading (its `struct.error`
+    taken for the end of the file): `ulog.ULog` stops there too, and `recover=True` keeps
+    the rows after it, as written."""
+    import struct
+
+    def row(msg_id, t, x):
+        return (b"D", struct.pack("<HQB", msg_id, t, x))
+
+    data = bytes(log_bytes(
+        (b"F", b"t:uint64_t timestamp;uint8_t x;"),
+        (b"F", b"e:uint64_t time;uint8_t x;"),
+        (b"A", struct.pack("<BH", 0, 1) + b"t"),
+        (b"A", struct.pack("<BH", 0, 2) + b"e"),
+        row(1, 2000, 1), row(2, 2500, 9), row(1, 3000, 2), row(1, 4000, 3),
+    ))
+    xs = lambda u: {d.name: d.data["x"].tolist() for d in u.data_list}
+    theirs = pyulog.ULog(io.BytesIO(data))
+    ours = ulog.ULog(io.BytesIO(data))
+    check_pair(theirs, ours)
+    assert xs(ours) == {"t": [1], "e": [9]} and not ours.file_corruption
+    kept = ulog.ULog(io.BytesIO(data), recover=True)
+    assert xs(kept) == {"t": [1, 2, 3], "e": [9]}
+    assert kept.get_dataset("t").data["timestamp"].tolist() == [2000, 3000, 4000]
+    capsys.readouterr()
+
+
 def test_array_sizes_in_any_characters_read_as_pyulog_reads_them(capsys):
     """pyulog slices a field's type by characters (`type_str[a+1:-1]` without a `]`) and
     `int()` takes any Unicode decimal digit: so do we (a multi-byte last character once

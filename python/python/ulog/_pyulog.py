@@ -37,7 +37,8 @@ _LEVELS = {
 class ULog:
     """A ULog file as pyulog 1.3.0's ``ULog`` reads it (same signature, attributes and
     methods; see pyulog's documentation). ``recover=True`` keeps every row the Rust reader
-    recovers (intact rows pyulog's recovery loses in a damaged file), the rest as pyulog."""
+    recovers (intact rows pyulog's recovery loses in a damaged file, and the rows after a row
+    whose format has no ``timestamp``, where pyulog stops reading), the rest as pyulog."""
 
     #: The 7 magic bytes every ULog file starts with (its version byte follows), as pyulog's.
     HEADER_BYTES = b"ULog\x01\x12\x35"
