@@ -254,7 +254,7 @@ pub struct Report {
     /// Subscriptions not written (a topic dropped, no row left in the window, or a format
     /// the log does not define): topic, instance.
     pub subscriptions_dropped: Vec<(String, u8)>,
-    /// Formats not written (their topics dropped, and nothing nests them).
+    /// Formats not written (their topics dropped, and nothing kept nests them).
     pub formats_dropped: Vec<String>,
     /// Info and multi info keys not written.
     pub info_dropped: Vec<String>,
@@ -433,7 +433,8 @@ impl Rewrite {
     }
 
     /// Not these topics: their subscriptions and rows are dropped, and their formats unless
-    /// a kept format nests them.
+    /// a kept format nests them. The types they nest stay (a topic of that name, which this
+    /// does not exclude, may be subscribed later in the log).
     pub fn exclude(mut self, topics: &[impl AsRef<str>]) -> Rewrite {
         self.exclude
             .extend(topics.iter().map(|t| t.as_ref().to_owned()));
@@ -824,7 +825,9 @@ impl<W: Write> Pass<'_, W> {
     }
 
     /// The formats of the held definitions the topic rules drop: those of topics not kept,
-    /// unless a kept format nests them, and nested types no kept format nests.
+    /// unless a kept format nests them. A type that only dropped topics nest stays when the
+    /// rules would keep a topic of its name (`exclude` does not name it): a subscription of
+    /// that name may come later in the stream, and without its format it could not be read.
     fn dropped_formats(&self, held: &[Held]) -> Vec<String> {
         let formats: Vec<crate::schema::Format> = held
             .iter()
@@ -835,21 +838,11 @@ impl<W: Write> Pass<'_, W> {
                     .map(|(f, _)| f)
             })
             .collect();
-        let nested = |name: &str| {
-            formats.iter().any(|f| {
-                f.fields
-                    .iter()
-                    .any(|x| matches!(&x.ty, TypeRef::Nested(n) if n == name))
-            })
-        };
-        // Topics (and unused formats) the rules keep, and nested types asked for by name;
-        // then everything they nest.
+        // Topics (and unused formats) the rules keep; then everything they nest.
         let mut kept: Vec<&str> = formats
             .iter()
             .map(|f| f.name.as_str())
-            .filter(|n| {
-                self.topic_kept(n) && (!nested(n) || self.rules.keep.iter().any(|k| k == n))
-            })
+            .filter(|n| self.topic_kept(n))
             .collect();
         // Everything a kept format nests, transitively.
         let mut i = 0;

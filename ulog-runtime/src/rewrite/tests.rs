@@ -315,10 +315,9 @@ fn topic_rules_drop_subscriptions_rows_and_formats_nothing_nests() {
     let schema = log.metadata().schema();
     assert!(schema.get("battery_status").is_none());
     assert!(schema.get("vehicle_gps_position").is_none());
-    assert!(
-        schema.get("cell").is_none(),
-        "nested by the dropped topic only"
-    );
+    // Nested by the dropped topic only, but not excluded: a topic of that name could
+    // follow (a stream's later subscription), and would need it.
+    assert!(schema.get("cell").is_some());
     assert!(log.subscription("battery_status", 0).is_none());
     assert_eq!(log.row_count(), 50);
     assert!(
@@ -986,4 +985,50 @@ fn hand_built(formats: &[&[u8]]) -> Vec<u8> {
         Message::Format(f).encode(&mut bytes).unwrap();
     }
     bytes
+}
+
+#[test]
+fn excluding_a_topic_keeps_the_type_it_nests_when_that_type_is_a_topic_too() {
+    // Found by the rewrite fuzzer: `esc_report` both nested by `esc_status` and subscribed
+    // itself; excluding `esc_status` dropped `esc_report`'s format while its subscription
+    // and rows were kept, and the output could not read them.
+    let mut f = hand_built(&[
+        b"esc_report:uint64_t timestamp;int32_t rpm;",
+        b"esc_status:uint64_t timestamp;esc_report[2] esc;",
+    ]);
+    let sub = |multi_id, msg_id, name: &'static [u8]| Message::Subscribe {
+        multi_id,
+        msg_id,
+        name,
+    };
+    sub(0, 0, b"esc_status").encode(&mut f).unwrap();
+    sub(0, 1, b"esc_report").encode(&mut f).unwrap();
+    for t in 1..=3u64 {
+        let mut status = t.to_le_bytes().to_vec();
+        status.extend_from_slice(&[0; 24]);
+        Message::Data {
+            msg_id: 0,
+            data: &status,
+        }
+        .encode(&mut f)
+        .unwrap();
+        let mut report = t.to_le_bytes().to_vec();
+        report.extend_from_slice(&(100 * t as i32).to_le_bytes());
+        Message::Data {
+            msg_id: 1,
+            data: &report,
+        }
+        .encode(&mut f)
+        .unwrap();
+    }
+    let (out, report) = rewrite(Rewrite::new().exclude(&["esc_status"]), &f);
+    let log = Log::from_vec(out).unwrap();
+    assert!(log.diagnostics().is_empty(), "{:?}", log.diagnostics());
+    assert!(log.subscription("esc_status", 0).is_none());
+    let rpm = log.columns("esc_report", 0).unwrap();
+    assert_eq!(
+        rpm.get("rpm").unwrap().as_int32(),
+        Some(&[100, 200, 300][..])
+    );
+    assert_eq!(report.formats_dropped, ["esc_status"]);
 }
