@@ -693,13 +693,12 @@ pub fn rewrite(data: &[u8]) {
     let input = Log::from_slice(data).expect("what the stream read, the whole-file reader reads");
     let back = Log::from_slice(&out).expect("the rewritten log reads");
     // Clean, but for a msg_id the input subscribes to another topic instance: written as
-    // it was (the same instance again is written once).
+    // it was (the same instance again is written once). The topic it was before may differ:
+    // a subscription between them that cannot be read is not written.
     let dup = |d: &ulog_runtime::Diagnostic| match &d.kind {
-        ulog_runtime::DiagnosticKind::DuplicateMsgId {
-            msg_id,
-            previous,
-            topic,
-        } => Some((*msg_id, previous.clone(), topic.clone())),
+        ulog_runtime::DiagnosticKind::DuplicateMsgId { msg_id, topic, .. } => {
+            Some((*msg_id, topic.clone()))
+        }
         _ => None,
     };
     let input_dups: Vec<_> = input.diagnostics().iter().filter_map(dup).collect();
