@@ -514,8 +514,17 @@ impl Metadata {
     }
 
     /// Takes in what a part of the file read by a worker found: its latest timestamp, sync
-    /// messages and dropouts (see the parallel whole-file reader).
-    pub(crate) fn absorb(&mut self, last_timestamp: u64, syncs: u64, dropouts_ms: u64) {
+    /// messages and dropouts, and whether it entered the data section (a logged string or
+    /// a dropout there: a parameter after it is a change) (see the parallel whole-file
+    /// reader).
+    pub(crate) fn absorb(
+        &mut self,
+        last_timestamp: u64,
+        syncs: u64,
+        dropouts_ms: u64,
+        in_data_section: bool,
+    ) {
+        self.in_data_section |= in_data_section;
         self.last_timestamp = self.last_timestamp.max(last_timestamp);
         self.sync_count += syncs;
         self.dropouts_us += dropouts_ms * 1000;

@@ -621,9 +621,12 @@ fn walk_rest<S: RowSink, P: Parts>(
             if usable {
                 let before = walker.meta.last_timestamp();
                 let dropped: u64 = part.dropouts.iter().map(|d| u64::from(d.duration_ms)).sum();
-                walker
-                    .meta
-                    .absorb(part.max_timestamp, part.sync_offsets.len() as u64, dropped);
+                walker.meta.absorb(
+                    part.max_timestamp,
+                    part.sync_offsets.len() as u64,
+                    dropped,
+                    copy.meta.in_data_section(),
+                );
                 walker
                     .framer
                     .resume_at(copy.framer.pos(), copy.framer.prev());

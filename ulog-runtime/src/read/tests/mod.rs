@@ -1032,3 +1032,62 @@ fn a_window_at_the_end_reads_on_when_the_input_grows() {
     assert!(!w.eof, "more came after the end");
     assert_eq!(w.bytes(), &(0..100).collect::<Vec<u8>>()[..]);
 }
+
+#[test]
+fn a_parameter_after_a_logged_string_a_thread_read_ahead_is_a_change() {
+    // Found by the rewrite fuzzer: a thread reading ahead started at the log's first
+    // logged string (its data section's first message, the definitions before it long),
+    // and the thread reading the part before it took the parameter after that part, then,
+    // for an initial parameter: the change was lost and the initial value overwritten.
+    let mut f = File::v1(0);
+    f.format("t:uint64_t timestamp;int16_t v;uint8_t[2] _padding0;");
+    f.msg(Message::Parameter(KeyValue {
+        key: b"float MC_ROLL_P",
+        value: &6.5f32.to_le_bytes(),
+    }));
+    // Definitions to the middle of the file: info values of zeros.
+    let zeros = vec![0u8; 60_000];
+    while f.0.len() < 4_700_000 {
+        f.info("uint8_t[60000] blob", &zeros);
+    }
+    let first_logged = f.0.len();
+    for i in 0..2_000u64 {
+        f.msg(Message::Logging {
+            level: b'6',
+            tag: None,
+            timestamp: i,
+            text: b"a logged string of the data section",
+        });
+    }
+    // A message a thread reading ahead hands back, then the change.
+    f.info("char[2] late", b"ok");
+    let change = f.msg(Message::Parameter(KeyValue {
+        key: b"float MC_ROLL_P",
+        value: &7.25f32.to_le_bytes(),
+    }));
+    f.subscribe(0, 0, "t");
+    // The file's middle, where the second thread's part starts looking for a boundary, a
+    // kilobyte before the first logged string: inside an info value's zeros, where none is.
+    let mut t = 10_000;
+    while f.0.len() < 2 * (first_logged - 1_000) {
+        f.data(0, &row(t, 1));
+        t += 1_000;
+    }
+    let facts = |threads| {
+        let (summary, _) = fold_rows_on(threads, &f.0, || (), |_, _| {}).unwrap();
+        let changes: Vec<(String, u64)> = summary
+            .parameter_changes
+            .iter()
+            .map(|c| (c.name.clone(), c.offset))
+            .collect();
+        let initial = summary.metadata.parameter("MC_ROLL_P");
+        (changes, initial, summary.diagnostics)
+    };
+    let one = facts(1);
+    assert_eq!(one.0, [("MC_ROLL_P".to_owned(), change)]);
+    assert_eq!(one.1, Some(ParamValue::Float(6.5)));
+    assert!(one.2.is_empty(), "{:?}", one.2);
+    assert_eq!(facts(2), one, "two threads");
+    let log = Log::from_slice(&f.0).unwrap();
+    assert_eq!(log.parameter_changes().len(), 1);
+}
