@@ -338,7 +338,8 @@ pub(crate) enum Applied {
         msg_id: u16,
         sizes: Option<(usize, usize)>,
         diagnostic: Option<Diagnostic>,
-        duplicate: Option<Diagnostic>,
+        /// Boxed: rare, and it would double the size of every `Applied`.
+        duplicate: Option<Box<Diagnostic>>,
     },
     Row {
         sub: usize,
@@ -788,7 +789,7 @@ impl Metadata {
             msg_id,
             sizes,
             diagnostic: problem.map(|kind| Diagnostic { offset, kind }),
-            duplicate: duplicate.map(|kind| Diagnostic { offset, kind }),
+            duplicate: duplicate.map(|kind| Box::new(Diagnostic { offset, kind })),
         })
     }
 

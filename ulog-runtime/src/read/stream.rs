@@ -457,7 +457,7 @@ impl<R: Read> StreamReader<R> {
                             duplicate,
                             ..
                         } => {
-                            let mut notes = diagnostic.into_iter().chain(duplicate).map(Box::new);
+                            let mut notes = diagnostic.map(Box::new).into_iter().chain(duplicate);
                             self.pending = notes.next();
                             self.pending_next = notes.next();
                             Next::Subscription

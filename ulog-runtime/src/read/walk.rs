@@ -204,7 +204,7 @@ impl<S: RowSink> Collected<S> {
                         ..
                     } => self
                         .diagnostics
-                        .extend(diagnostic.into_iter().chain(duplicate)),
+                        .extend(diagnostic.into_iter().chain(duplicate.map(|d| *d))),
                     Applied::Row { sub, timestamp } => {
                         if walker.meta.subscriptions[sub].timestamp_type()
                             != Some(Primitive::UInt64)
