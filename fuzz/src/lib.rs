@@ -149,7 +149,8 @@ struct Seen {
 }
 
 /// The streaming reader fed in chunks of random sizes yields what the whole-file reader
-/// yields: the same rows, logged strings, parameter changes and dropouts. The first byte
+/// yields: the same rows, logged strings, parameter changes and dropouts, and in the end the
+/// same initial parameters, info and multi info. The first byte
 /// gives how many of the next bytes are chunk sizes; the rest is the log.
 pub fn stream_chunks(data: &[u8]) {
     let Some((&n, rest)) = data.split_first() else {
@@ -243,6 +244,21 @@ pub fn stream_chunks(data: &[u8]) {
         }
     }
     assert_eq!(seen, expected, "stream and whole file differ");
+    // What the definitions left when the log ends: the whole-file reader takes it in from
+    // the parts its threads read (as Debug text: a NaN value equals itself there).
+    let facts = |m: &ulog_runtime::read::Metadata| {
+        format!(
+            "{:?}\n{:?}\n{:?}",
+            m.initial_parameters(),
+            m.info(),
+            m.multi_info()
+        )
+    };
+    assert_eq!(
+        facts(reader.metadata()),
+        facts(whole.metadata()),
+        "initial parameters or info differ between the stream and the whole file"
+    );
 }
 
 /// The rows `read::fold_file` gives of `log` written to a file of its own (removed after),

@@ -837,6 +837,16 @@ fn fuzz_check_on_every_corpus_log(target: &str, check: FuzzCheck) {
     }
 }
 
+/// The streaming fuzz check on every corpus log, read 4 KiB at a time (a first byte of 0: no
+/// chunk sizes): the stream gives the whole-file reader's rows, logged strings, parameter
+/// changes and dropouts, and ends with its initial parameters, info and multi info.
+#[test]
+fn the_stream_chunks_fuzz_check_passes_on_every_corpus_log() {
+    fuzz_check_on_every_corpus_log("stream_chunks", |log| {
+        fuzz_checks::stream_chunks(&[&[0u8][..], log].concat())
+    });
+}
+
 /// The pyulog-compatibility fuzz check on every corpus log: pyulog's reading under each
 /// option ends and the options agree (whole rows, header-only formats, strict strings, a
 /// topic filter, the recovered datasets).
