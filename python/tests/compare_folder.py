@@ -1,0 +1,112 @@
+"""pyulog 1.3.0 and ``ulog.ULog`` on every file of some folders (a fuzzer's corpus, a folder
+of odd logs): the same attributes and printed warnings (``test_compat.check_pair``), or the
+same exception. Where pyulog does not finish within a time limit (its recovery loops forever
+on many damaged inputs), ``ulog.ULog`` must return, or raise a ``ulog.ULogError``.
+
+    python python/tests/compare_folder.py [--limit SECONDS] FOLDER...
+
+Prints a progress line every 200 files, then the counts and every difference; exits 1 if
+there was one. Needs pyulog==1.3.0 and the ulog package installed."""
+
+import contextlib
+import io
+import os
+import signal
+import sys
+import traceback
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+import pyulog  # noqa: E402
+
+import ulog  # noqa: E402
+from test_compat import check_pair, ours_of  # noqa: E402
+
+
+class TooLong(BaseException):
+    """pyulog ran past the limit (a BaseException: nothing in pyulog catches it)."""
+
+
+def too_long(*_):
+    raise TooLong
+
+
+def compare(data: bytes, limit: float):
+    """``"same"``, ``"refused"`` (both raised alike), ``"looped"``, or the difference."""
+    printed_theirs = io.StringIO()
+    signal.setitimer(signal.ITIMER_REAL, limit)
+    raised = None
+    try:
+        with contextlib.redirect_stdout(printed_theirs):
+            theirs = pyulog.ULog(io.BytesIO(data))
+    except TooLong:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        try:
+            with contextlib.redirect_stdout(io.StringIO()):
+                ulog.ULog(io.BytesIO(data))
+        except ulog.ULogError:
+            pass  # what pyulog would raise further on, had it gone on
+        except Exception as e:
+            return f"pyulog does not finish; ulog.ULog raised {e!r}"
+        return "looped"
+    except Exception as e:
+        raised = e
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+    printed_ours = io.StringIO()
+    try:
+        with contextlib.redirect_stdout(printed_ours):
+            ours = ulog.ULog(io.BytesIO(data))
+    except Exception as e:
+        if raised is not None and isinstance(e, ours_of(type(raised))):
+            return "refused"
+        return f"ulog.ULog raised {e!r}, pyulog {raised!r}"
+    if raised is not None:
+        return f"pyulog raised {raised!r}, ulog.ULog read it"
+    if printed_ours.getvalue() != printed_theirs.getvalue():
+        return f"printed {printed_ours.getvalue()[:300]!r}, pyulog {printed_theirs.getvalue()[:300]!r}"
+    try:
+        check_pair(theirs, ours)
+    except Exception as e:
+        return f"differs: {type(e).__name__} {str(e)[:300] or traceback.format_exc().splitlines()[-3]}"
+    return "same"
+
+
+def main():
+    args = sys.argv[1:]
+    limit = 0.3
+    if "--limit" in args:
+        i = args.index("--limit")
+        limit = float(args[i + 1])
+        del args[i:i + 2]
+    if not args:
+        sys.exit(__doc__)
+    signal.signal(signal.SIGALRM, too_long)
+    counts = {"same": 0, "refused": 0, "looped": 0}
+    differences = []
+    n = 0
+    for folder in args:
+        for name in sorted(os.listdir(folder)):
+            path = os.path.join(folder, name)
+            if not os.path.isfile(path):
+                continue
+            with open(path, "rb") as f:
+                data = f.read()
+            outcome = compare(data, limit)
+            if outcome in counts:
+                counts[outcome] += 1
+            else:
+                differences.append((path, outcome))
+            n += 1
+            if n % 200 == 0:
+                print(f"{n} files, {len(differences)} differences", flush=True)
+    print(f"files {n}: the same {counts['same']}, refused alike {counts['refused']}, "
+          f"pyulog not finished within {limit} s {counts['looped']}, "
+          f"differences {len(differences)}")
+    for path, why in differences:
+        print(f"{path}: {why}")
+    sys.exit(1 if differences else 0)
+
+
+if __name__ == "__main__":
+    main()
