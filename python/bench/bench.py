@@ -4,6 +4,11 @@ process (its peak resident memory its own): pyulog 1.3.0's ``ULog(path)``, ``ulo
 (the same objects on the Rust reader), and ``ulog.open(path)`` with ``table()`` of every
 topic instance. Prints the medians of wall time and peak RSS, and the ratios.
 
+Each process imports numpy and the one library it measures, as a script using that library
+does, so the peak holds that library's code and no other's. Both read their modules from
+bytecode, as installed by pip: ``ulog``'s are compiled first (a ``maturin develop`` build
+leaves none, and with ``PYTHONDONTWRITEBYTECODE`` set each import would compile them again).
+
     python bench.py LOG [--runs N]
 
 Build the package optimized first (``maturin develop`` in ``python/``, or ``pip install
@@ -16,20 +21,27 @@ import statistics
 import subprocess
 import sys
 
-# What is timed (after the imports, which every run pays alike).
+# What is timed (after the imports), and the library it needs.
 WORK = {
-    "pyulog.ULog": "u = pyulog.ULog(PATH); n = sum(len(d.data['timestamp']) for d in u.data_list)",
-    "ulog.ULog": "u = ulog.ULog(PATH); n = sum(len(d.data['timestamp']) for d in u.data_list)",
-    "ulog.open + table()": (
-        "log = ulog.open(PATH); "
-        "n = sum(log.table(t['name'], t['multi_id']).num_rows for t in log.topics())"
+    "pyulog.ULog": (
+        "pyulog", "u = pyulog.ULog(PATH); n = sum(len(d.data['timestamp']) for d in u.data_list)"
     ),
-    "ulog.open + tables()": "log = ulog.open(PATH); n = sum(t.num_rows for t in log.tables().values())",
+    "ulog.ULog": (
+        "ulog", "u = ulog.ULog(PATH); n = sum(len(d.data['timestamp']) for d in u.data_list)"
+    ),
+    "ulog.open + table()": (
+        "ulog",
+        "log = ulog.open(PATH); "
+        "n = sum(log.table(t['name'], t['multi_id']).num_rows for t in log.topics())",
+    ),
+    "ulog.open + tables()": (
+        "ulog", "log = ulog.open(PATH); n = sum(t.num_rows for t in log.tables().values())"
+    ),
 }
 
 CHILD = """
 import json, resource, sys, time
-import numpy, pyulog, ulog
+import numpy, {library}
 PATH = sys.argv[1]
 t = time.perf_counter()
 {work}
@@ -48,6 +60,18 @@ def cpu_model() -> str:
     return platform.processor() or "unknown"
 
 
+def compile_ulog():
+    """Writes the bytecode of the ``ulog`` package's modules, as ``pip install`` does."""
+    import compileall
+    import importlib.util
+    import os
+
+    spec = importlib.util.find_spec("ulog")
+    if spec is None or spec.origin is None:
+        sys.exit("the ulog package is not installed (maturin develop in python/, or pip install ./python)")
+    compileall.compile_dir(os.path.dirname(spec.origin), quiet=1)
+
+
 USAGE = "usage: python bench.py LOG [--runs N]  (needs the ulog package, pyulog==1.3.0 and numpy)"
 
 
@@ -63,13 +87,15 @@ def main():
     if len(args) != 1 or args[0].startswith("-"):
         sys.exit(USAGE)
     path = args[0]
+    compile_ulog()
     results = {name: [] for name in WORK}
     names = list(WORK)
     for r in range(runs):
         order = names if r % 2 == 0 else names[::-1]
         for name in order:
             out = subprocess.run(
-                [sys.executable, "-c", CHILD.format(work=WORK[name]), path],
+                [sys.executable, "-c", CHILD.format(library=WORK[name][0], work=WORK[name][1]),
+                 path],
                 capture_output=True, text=True)
             if out.returncode != 0:
                 # The child's own error (a missing module, an unreadable log), not a traceback
@@ -83,7 +109,8 @@ def main():
     base = med["pyulog.ULog"]
     for n, (wall, rss) in med.items():
         print(f"  {n:<22} wall {wall:8.3f} s   peak RSS {rss:8.1f} MiB   rows {rows[n]:>10}"
-              f"   pyulog/this: wall {base[0] / wall:6.1f}x, RSS {rss / base[1]:5.2f} of pyulog's")
+              f"   pyulog/this: wall {base[0] / wall:6.1f}x, RSS {rss - base[1]:+7.1f} MiB"
+              f" ({rss / base[1]:.3f} of pyulog's)")
 
 
 if __name__ == "__main__":
