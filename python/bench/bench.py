@@ -9,7 +9,12 @@ does, so the peak holds that library's code and no other's. Both read their modu
 bytecode, as installed by pip: ``ulog``'s are compiled first (a ``maturin develop`` build
 leaves none, and with ``PYTHONDONTWRITEBYTECODE`` set each import would compile them again).
 
-    python bench.py LOG [--runs N]
+    python bench.py LOG [--runs N] [--cache read|pages|keep]
+
+How the page cache holds the log moves ``ulog``'s times (it maps the log; pyulog reads it),
+so the log's cached pages are dropped and read back first, as ``versus`` does: from start to
+end (``read``, the default: large folios), one 4 KiB page at a time without read-ahead
+(``pages``: small folios, as a log cached for hours drifts to), or left as found (``keep``).
 
 Build the package optimized first (``maturin develop`` in ``python/``, or ``pip install
 ./python``: both use the workspace's ``wheel`` profile): a debug build measures nothing.
@@ -72,7 +77,35 @@ def compile_ulog():
     compileall.compile_dir(os.path.dirname(spec.origin), quiet=1)
 
 
-USAGE = "usage: python bench.py LOG [--runs N]  (needs the ulog package, pyulog==1.3.0 and numpy)"
+def prepare_cache(path: str, cache: str) -> str:
+    """Puts the log in the page cache as ``cache`` says; returns how, for the report."""
+    import os
+
+    if cache == "keep":
+        return "page cache as found"
+    if not hasattr(os, "posix_fadvise"):
+        sys.exit("--cache read and pages need posix_fadvise (Linux): use --cache keep")
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fdatasync(fd)  # written pages not yet on disk cannot be dropped
+        os.posix_fadvise(fd, 0, 0, os.POSIX_FADV_DONTNEED)
+        at = 0
+        if cache == "read":
+            while chunk := os.pread(fd, 1 << 20, at):
+                at += len(chunk)
+            return "log read into the page cache once, start to end (large folios)"
+        os.posix_fadvise(fd, 0, 0, os.POSIX_FADV_RANDOM)
+        while chunk := os.pread(fd, 4096, at):
+            at += len(chunk)
+        return "log read into the page cache one 4 KiB page at a time (small folios)"
+    finally:
+        os.close(fd)
+
+
+USAGE = (
+    "usage: python bench.py LOG [--runs N] [--cache read|pages|keep]"
+    "  (needs the ulog package, pyulog==1.3.0 and numpy)"
+)
 
 
 def main():
@@ -84,10 +117,18 @@ def main():
             sys.exit(USAGE)
         runs = int(args[i + 1])
         del args[i:i + 2]
+    cache = "read"
+    if "--cache" in args:
+        i = args.index("--cache")
+        if i + 1 >= len(args) or args[i + 1] not in ("read", "pages", "keep"):
+            sys.exit(USAGE)
+        cache = args[i + 1]
+        del args[i:i + 2]
     if len(args) != 1 or args[0].startswith("-"):
         sys.exit(USAGE)
     path = args[0]
     compile_ulog()
+    how = prepare_cache(path, cache)
     results = {name: [] for name in WORK}
     names = list(WORK)
     for r in range(runs):
@@ -102,7 +143,7 @@ def main():
                 # of this script.
                 sys.exit(f"{name} failed:\n{out.stderr.strip()}")
             results[name].append(json.loads(out.stdout.strip().splitlines()[-1]))
-    print(f"CPU: {cpu_model()}; {runs} runs each, interleaved; log {path}")
+    print(f"CPU: {cpu_model()}; {runs} runs each, interleaved; log {path}; {how}")
     med = {n: (statistics.median(x["wall"] for x in v), statistics.median(x["rss_mib"] for x in v))
            for n, v in results.items()}
     rows = {n: v[0]["rows"] for n, v in results.items()}
