@@ -405,7 +405,7 @@ impl<'a> Reader<'a> {
     }
 
     fn print(&mut self, line: impl Into<String>) {
-        self.f.printed.push(line.into());
+        self.f.printed.push_shared(line.into());
     }
 
     fn definitions(&mut self) -> Result<(), PyulogError> {
@@ -448,7 +448,7 @@ impl<'a> Reader<'a> {
                 let name = format.name.clone();
                 match self.f.formats.iter_mut().find(|f| f.name == name) {
                     Some(f) => *f = format,
-                    None => self.f.formats.push(format),
+                    None => self.f.formats.push_shared(format),
                 }
             }
             b'P' => {
@@ -521,7 +521,7 @@ impl<'a> Reader<'a> {
             Some(to)
                 if self.seeks_back.len() < MOST_SEEKS_BACK && !self.seeks_back.contains(&to) =>
             {
-                self.seeks_back.push(to);
+                self.seeks_back.push_shared(to);
                 to
             }
             _ => start + 1,
@@ -555,12 +555,12 @@ impl<'a> Reader<'a> {
         match self.f.info_multiple.iter_mut().find(|m| m.0 == key) {
             Some(m) => {
                 if continued {
-                    m.2.last_mut().expect("never empty").push(value);
+                    m.2.last_mut().expect("never empty").push_shared(value);
                 } else {
-                    m.2.push(vec![value]);
+                    m.2.push_shared(vec![value]);
                 }
             }
-            None => self.f.info_multiple.push((key, ty, vec![vec![value]])),
+            None => self.f.info_multiple.push_shared((key, ty, vec![vec![value]])),
         }
         Ok(())
     }
@@ -580,7 +580,7 @@ impl<'a> Reader<'a> {
             {
                 Some(k) => k,
                 None => {
-                    self.f.default_parameters.push((key_of_bit, Vec::new()));
+                    self.f.default_parameters.push_shared((key_of_bit, Vec::new()));
                     self.f.default_parameters.len() - 1
                 }
             };
@@ -604,7 +604,7 @@ impl<'a> Reader<'a> {
             let type_str = split.next().unwrap_or_default();
             let field = split.next().ok_or(Raise::Corrupt)?.to_owned();
             match type_str.find('[') {
-                None => fields.push((type_str.to_owned(), 0, field)),
+                None => fields.push_shared((type_str.to_owned(), 0, field)),
                 Some(a) => {
                     // Python's `type_str[a+1:b]`, `b` -1 when there is no `]`: before the
                     // last character (not byte: the text may hold any character).
@@ -621,7 +621,7 @@ impl<'a> Reader<'a> {
                     if !(0..=0xFFFF).contains(&n) {
                         return Err(Raise::Corrupt);
                     }
-                    fields.push((type_str[..a].to_owned(), n as u32, field));
+                    fields.push_shared((type_str[..a].to_owned(), n as u32, field));
                 }
             }
         }
@@ -677,7 +677,7 @@ impl<'a> Reader<'a> {
         }
         while let Some(s) = self.subscriptions.pop() {
             if !s.rows.is_empty() {
-                self.f.data.push(Dataset {
+                self.f.data.push_shared(Dataset {
                     name: s.name,
                     multi_id: s.multi_id,
                     msg_id: s.msg_id,
@@ -706,7 +706,7 @@ impl<'a> Reader<'a> {
                 let (_, key, value) = self.info(body)?;
                 self.f
                     .changed_parameters
-                    .push((self.f.last_timestamp, key, value));
+                    .push_shared((self.f.last_timestamp, key, value));
             }
             b'Q' => self.default_parameter(body)?,
             b'A' => self.subscribe(body)?,
@@ -715,7 +715,7 @@ impl<'a> Reader<'a> {
                     return Err(Raise::Struct);
                 }
                 let message = self.string(&body[9..])?;
-                self.f.logged.push(Logged {
+                self.f.logged.push_shared(Logged {
                     level: body[0],
                     timestamp: u64::from_le_bytes(body[1..9].try_into().expect("8")),
                     message,
@@ -733,8 +733,8 @@ impl<'a> Reader<'a> {
                     message: self.string(&body[11..])?,
                 };
                 match self.f.tagged.iter_mut().find(|g| g.0 == tag) {
-                    Some(g) => g.1.push(t),
-                    None => self.f.tagged.push((tag, vec![t])),
+                    Some(g) => g.1.push_shared(t),
+                    None => self.f.tagged.push_shared((tag, vec![t])),
                 }
             }
             b'O' => {
@@ -742,7 +742,7 @@ impl<'a> Reader<'a> {
                     return Err(Raise::Struct);
                 }
                 let duration = u16::from_le_bytes([body[0], body[1]]);
-                self.f.dropouts.push((duration, self.f.last_timestamp));
+                self.f.dropouts.push_shared((duration, self.f.last_timestamp));
             }
             b'S' => self.f.sync_seq_cnt += 1,
             _ => {
@@ -826,7 +826,7 @@ impl<'a> Reader<'a> {
             };
             match self.by_msg_id[usize::from(msg_id)] {
                 0 => {
-                    self.subscriptions.push(sub);
+                    self.subscriptions.push_shared(sub);
                     self.by_msg_id[usize::from(msg_id)] = self.subscriptions.len() as u32;
                 }
                 i => self.subscriptions[i as usize - 1] = sub,
@@ -850,7 +850,7 @@ impl<'a> Reader<'a> {
         else {
             if !self.filtered.contains(&msg_id) {
                 if self.missing.insert(msg_id) {
-                    self.f.printed.push(format!(
+                    self.f.printed.push_shared(format!(
                         "Warning: no subscription found for message id {msg_id}. Continuing, \
                          but file is most likely corrupt"
                     ));
@@ -920,10 +920,10 @@ fn flatten(
         if basic_size(ty).is_some() {
             if *n > 0 {
                 for i in 0..*n {
-                    out.push((format!("{prefix}{field}[{i}]"), ty.clone()));
+                    out.push_shared((format!("{prefix}{field}[{i}]"), ty.clone()));
                 }
             } else {
-                out.push((format!("{prefix}{field}"), ty.clone()));
+                out.push_shared((format!("{prefix}{field}"), ty.clone()));
             }
             if prefix.is_empty() && field == "timestamp" {
                 *timestamp_idx = out.len() as i64 - 1;
@@ -974,7 +974,7 @@ pub fn recovered_datasets(
         if rows.is_empty() {
             continue;
         }
-        out.push(Dataset {
+        out.push_shared(Dataset {
             name: sub.name.clone(),
             multi_id: sub.multi_id,
             msg_id: sub.msg_id,
@@ -994,6 +994,24 @@ fn slice(data: &[u8], a: usize, b: usize) -> &[u8] {
     &data[a..b.clamp(a, data.len())]
 }
 
+/// `Vec::push` growing the vector through `Vec::reserve`. Every element type has its own
+/// copy of `push`'s growth code, which the linker places beside that type's other code,
+/// all over a program as large as the Python module; `reserve`'s growth is one function for
+/// every type, which the rows already run. A read growing its lists this way touches fewer
+/// pages of the module's code, each of which the kernel maps with the pages around it:
+/// `ulog.ULog`'s peak memory is that much smaller (the README's Python section).
+trait PushShared<T> {
+    fn push_shared(&mut self, value: T);
+}
+
+impl<T> PushShared<T> for Vec<T> {
+    #[inline]
+    fn push_shared(&mut self, value: T) {
+        self.reserve(1);
+        self.push(value);
+    }
+}
+
 /// Sets a dict entry (a key keeps its first place).
 fn set(dict: &mut Vec<(String, String, PyValue)>, key: String, (ty, value): (String, PyValue)) {
     match dict.iter_mut().find(|e| e.0 == key) {
@@ -1001,14 +1019,14 @@ fn set(dict: &mut Vec<(String, String, PyValue)>, key: String, (ty, value): (Str
             e.1 = ty;
             e.2 = value;
         }
-        None => dict.push((key, ty, value)),
+        None => dict.push_shared((key, ty, value)),
     }
 }
 
 fn set1(dict: &mut Vec<(String, PyValue)>, key: String, value: PyValue) {
     match dict.iter_mut().find(|e| e.0 == key) {
         Some(e) => e.1 = value,
-        None => dict.push((key, value)),
+        None => dict.push_shared((key, value)),
     }
 }
 
