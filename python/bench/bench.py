@@ -44,14 +44,17 @@ WORK = {
     ),
 }
 
+# json is imported once the peak is taken: `ulog` imports it, pyulog does not.
 CHILD = """
-import json, resource, sys, time
+import resource, sys, time
 import numpy, {library}
 PATH = sys.argv[1]
 t = time.perf_counter()
 {work}
 wall = time.perf_counter() - t
-print(json.dumps({{"wall": wall, "rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "rows": n}}))
+rss_mib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+import json
+print(json.dumps({{"wall": wall, "rss_mib": rss_mib, "rows": n}}))
 """
 
 
