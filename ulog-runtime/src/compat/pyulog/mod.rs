@@ -560,7 +560,10 @@ impl<'a> Reader<'a> {
                     m.2.push_shared(vec![value]);
                 }
             }
-            None => self.f.info_multiple.push_shared((key, ty, vec![vec![value]])),
+            None => self
+                .f
+                .info_multiple
+                .push_shared((key, ty, vec![vec![value]])),
         }
         Ok(())
     }
@@ -580,7 +583,9 @@ impl<'a> Reader<'a> {
             {
                 Some(k) => k,
                 None => {
-                    self.f.default_parameters.push_shared((key_of_bit, Vec::new()));
+                    self.f
+                        .default_parameters
+                        .push_shared((key_of_bit, Vec::new()));
                     self.f.default_parameters.len() - 1
                 }
             };
@@ -742,7 +747,9 @@ impl<'a> Reader<'a> {
                     return Err(Raise::Struct);
                 }
                 let duration = u16::from_le_bytes([body[0], body[1]]);
-                self.f.dropouts.push_shared((duration, self.f.last_timestamp));
+                self.f
+                    .dropouts
+                    .push_shared((duration, self.f.last_timestamp));
             }
             b'S' => self.f.sync_seq_cnt += 1,
             _ => {
