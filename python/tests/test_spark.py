@@ -4,7 +4,9 @@ pyulog's figures, and the Spark-written hive layout read by DuckDB equal to the 
 ``ulog parquet --layout hive`` writes. Needs pyspark and Java (``.ci/run`` installs both)."""
 
 import math
+import os
 import shutil
+import sys
 
 import pytest
 import pyulog
@@ -35,6 +37,10 @@ def spark():
         if under_ci():
             pytest.fail("under CI Java must be installed (.ci/run installs openjdk-17)")
         pytest.skip("no java")
+    # The workers run this interpreter (pyarrow and the package beside it), not the first
+    # `python3` on the PATH, which outside `.ci/run` has neither.
+    before = os.environ.get("PYSPARK_PYTHON")
+    os.environ["PYSPARK_PYTHON"] = sys.executable
     s = (
         SparkSession.builder.master("local[2]")
         .appName("ulog-spark-test")
@@ -46,6 +52,10 @@ def spark():
     s.sparkContext.setLogLevel("ERROR")
     yield s
     s.stop()
+    if before is None:
+        del os.environ["PYSPARK_PYTHON"]
+    else:
+        os.environ["PYSPARK_PYTHON"] = before
 
 
 def test_the_corpus_on_spark_equals_pyulog_and_ulog_parquet(spark, tmp_path, capsys):

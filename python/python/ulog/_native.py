@@ -94,7 +94,7 @@ class Log:
     as log:`` closes it at the end of the block."""
 
     def __init__(self, native: "_ulog.Log"):
-        self._native = native
+        self._native: Union["_ulog.Log", _Closed] = native
 
     def close(self) -> None:
         """Lets the log go: its memory map (or its bytes) is released once nothing else

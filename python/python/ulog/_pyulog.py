@@ -61,7 +61,8 @@ class ULog:
     MSG_TYPE_LOGGING_TAGGED = ord("C")
     MSG_TYPE_FLAG_BITS = ord("B")
 
-    _UNPACK_TYPES = {
+    # pyulog's table: per type its `struct` code, size in bytes and numpy type.
+    _UNPACK_TYPES: Dict[str, List[Any]] = {
         "int8_t": ["b", 1, np.int8],
         "uint8_t": ["B", 1, np.uint8],
         "int16_t": ["h", 2, np.int16],
@@ -130,7 +131,9 @@ class ULog:
         if log_file is not None:
             self._load_file(log_file, message_name_filter_list, parse_header_only, recover)
 
-    def _load_file(self, log_file, message_name_filter_list, parse_header_only, recover):
+    def _load_file(
+        self, log_file: Any, message_name_filter_list: Any, parse_header_only: bool, recover: bool
+    ) -> None:
         filt = message_name_filter_list
         if filt is not None and not isinstance(filt, str):
             filt = list(filt)
@@ -367,12 +370,15 @@ class ULog:
                 data.extend(bytes(m.message, "utf-8"))
                 items.append((m.timestamp, _message(self.MSG_TYPE_LOGGING, data)))
             for msgs in self._logged_messages_tagged.values():
-                for m in msgs:
-                    data = bytearray(struct.pack("<BHQ", m.log_level, m.tag, m.timestamp))
-                    data.extend(bytes(m.message, "utf-8"))
-                    items.append((m.timestamp, _message(self.MSG_TYPE_LOGGING_TAGGED, data)))
-            for d in self._dropouts:
-                items.append((d.timestamp, _message(self.MSG_TYPE_DROPOUT, struct.pack("<H", d.duration))))
+                for tagged in msgs:
+                    data = bytearray(
+                        struct.pack("<BHQ", tagged.log_level, tagged.tag, tagged.timestamp)
+                    )
+                    data.extend(bytes(tagged.message, "utf-8"))
+                    items.append((tagged.timestamp, _message(self.MSG_TYPE_LOGGING_TAGGED, data)))
+            for drop in self._dropouts:
+                dropout = struct.pack("<H", drop.duration)
+                items.append((drop.timestamp, _message(self.MSG_TYPE_DROPOUT, dropout)))
             for t, name, value in self._changed_parameters:
                 items.append((t, _message(self.MSG_TYPE_PARAMETER, self._parameter_data(name, value))))
             items.sort(key=lambda x: x[0])

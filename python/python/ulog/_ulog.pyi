@@ -1,7 +1,23 @@
 """Type stubs of the native module `ulog._ulog` (the Rust part of the package)."""
 
 from os import PathLike
-from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union, final
+
+__all__ = [
+    "ULogError",
+    "NotAULogError",
+    "UnsupportedFlagError",
+    "ULogIOError",
+    "_rebuild_io_error",
+    "read_pyulog",
+    "Log",
+    "Table",
+    "to_parquet",
+    "window_words",
+    "cli_main",
+    "log_names",
+    "__version__",
+]
 
 __version__: str
 
@@ -9,6 +25,10 @@ class ULogError(Exception): ...
 class NotAULogError(ULogError): ...
 class UnsupportedFlagError(ULogError): ...
 class ULogIOError(ULogError, OSError): ...
+
+def _rebuild_io_error(
+    message: str, errno: Optional[int], filename: Optional[str]
+) -> ULogIOError: ...
 
 def read_pyulog(
     source: Union[str, bytes],
@@ -19,6 +39,7 @@ def read_pyulog(
     recover: bool = False,
 ) -> Dict[str, Any]: ...
 
+@final
 class Table:
     def __arrow_c_stream__(self, requested_schema: Any = None) -> Any: ...
     def __arrow_c_schema__(self) -> Any: ...
@@ -33,6 +54,7 @@ class Table:
     def numpy(self) -> Dict[str, Any]: ...
     def __len__(self) -> int: ...
 
+@final
 class Log:
     @staticmethod
     def open(source: Union[str, "PathLike[str]", bytes]) -> "Log": ...
