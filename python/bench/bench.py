@@ -20,6 +20,7 @@ Build the package optimized first (``maturin develop`` in ``python/``, or ``pip 
 ./python``: both use the workspace's ``wheel`` profile): a debug build measures nothing.
 """
 
+import argparse
 import json
 import platform
 import statistics
@@ -105,33 +106,20 @@ def prepare_cache(path: str, cache: str) -> str:
         os.close(fd)
 
 
-USAGE = (
-    "usage: python bench.py LOG [--runs N] [--cache read|pages|keep]"
-    "  (needs the ulog package, pyulog==1.3.0 and numpy)"
-)
-
-
 def main():
-    args = sys.argv[1:]
-    runs = 3
-    if "--runs" in args:
-        i = args.index("--runs")
-        if i + 1 >= len(args) or not args[i + 1].isdigit():
-            sys.exit(USAGE)
-        runs = int(args[i + 1])
-        del args[i:i + 2]
-    cache = "read"
-    if "--cache" in args:
-        i = args.index("--cache")
-        if i + 1 >= len(args) or args[i + 1] not in ("read", "pages", "keep"):
-            sys.exit(USAGE)
-        cache = args[i + 1]
-        del args[i:i + 2]
-    if len(args) != 1 or args[0].startswith("-"):
-        sys.exit(USAGE)
-    path = args[0]
+    parser = argparse.ArgumentParser(
+        description="pyulog 1.3.0 and the ulog package side by side on one log "
+        "(needs both, and numpy)")
+    parser.add_argument("log")
+    parser.add_argument("--runs", type=int, default=3, help="runs of each reader (3)")
+    parser.add_argument("--cache", choices=("read", "pages", "keep"), default="read",
+                        help="how the log is put in the page cache first (read)")
+    args = parser.parse_args()
+    if args.runs < 1:
+        parser.error("--runs takes a number of runs, at least 1")
+    runs, path = args.runs, args.log
     compile_ulog()
-    how = prepare_cache(path, cache)
+    how = prepare_cache(path, args.cache)
     results = {name: [] for name in WORK}
     names = list(WORK)
     for r in range(runs):

@@ -13,6 +13,7 @@ damaged log.
 Prints a progress line every 200 files, then the counts and every difference; exits 1 if
 there was one. Needs pyulog==1.3.0 and the ulog package installed."""
 
+import argparse
 import os
 import sys
 
@@ -22,24 +23,23 @@ from test_compat import compare_with_pyulog  # noqa: E402
 
 
 def main():
-    args = sys.argv[1:]
-    limit = 0.3
-    if "--limit" in args:
-        i = args.index("--limit")
-        try:
-            limit = float(args[i + 1])
-        except (IndexError, ValueError):
-            sys.exit("--limit takes a number of seconds\n\n" + __doc__)
-        del args[i:i + 2]
-    if not args or any(not os.path.isdir(a) for a in args):
-        sys.exit(__doc__)
+    parser = argparse.ArgumentParser(
+        description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("folders", nargs="+", metavar="FOLDER")
+    parser.add_argument("--limit", type=float, default=0.3,
+                        help="seconds pyulog is given, plus one per MB of the file (0.3)")
+    args = parser.parse_args()
+    limit = args.limit
+    for folder in args.folders:
+        if not os.path.isdir(folder):
+            parser.error(f"{folder} is not a folder")
     counts = {"same": 0, "refused": 0, "looped": 0}
     differences = []
     n = 0
-    for folder in args:
-        names = sorted(n for n in os.listdir(folder) if os.path.isfile(os.path.join(folder, n)))
-        if any(n.endswith(".ulg") for n in names):
-            names = [n for n in names if n.endswith(".ulg")]
+    for folder in args.folders:
+        names = sorted(f for f in os.listdir(folder) if os.path.isfile(os.path.join(folder, f)))
+        if any(f.endswith(".ulg") for f in names):
+            names = [f for f in names if f.endswith(".ulg")]
         for name in names:
             path = os.path.join(folder, name)
             with open(path, "rb") as f:
