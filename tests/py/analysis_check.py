@@ -133,9 +133,12 @@ def rows_finite(*columns):
 def check_motion(stats, data, checks):
     lp = data("vehicle_local_position")
     if lp is not None:
-        pos = rows_finite(lp["x"], lp["y"], lp["z"])
+        rows = rows_finite(lp["timestamp"], lp["x"], lp["y"], lp["z"])
+        t, pos = rows[0], rows[1:]
         if pos.shape[1] > 0:
             steps = np.sqrt((np.diff(pos, axis=1) ** 2).sum(axis=0))
+            # No step across time that runs back (logs joined, a damaged log).
+            steps = steps[np.diff(t) >= 0]
             checks.same("total_distance_m", stats["total_distance_m"], steps.sum())
             alt = -pos[2]
             checks.same("max_altitude_diff_m", stats["max_altitude_diff_m"], alt.max() - alt.min())
@@ -228,14 +231,15 @@ def check_vibration(vibration, data, checks):
 
 
 def check_modes(modes, data, checks):
-    """Segments of nav_state in file order: each starts at the row whose mode differs."""
+    """Segments of nav_state: each starts at the row whose mode differs from the row
+    before, or whose time is before that row's; by start time."""
     s = data("vehicle_status")
     if s is None or "nav_state" not in s:
         return
     t, nav = s["timestamp"], s["nav_state"]
-    starts = [0] + [i for i in range(1, len(nav)) if nav[i] != nav[i - 1]]
+    starts = [0] + [i for i in range(1, len(nav)) if nav[i] != nav[i - 1] or t[i] < t[i - 1]]
     ours = [(m["mode_id"], m["start_us"]) for m in modes]
-    theirs = [(int(nav[i]), int(t[i])) for i in starts]
+    theirs = sorted(((int(nav[i]), int(t[i])) for i in starts), key=lambda m: m[1])
     checks.compared += 1
     if ours != theirs:
         checks.mismatches.append({"fact": "flight_modes", "ours": ours[:20], "numpy": theirs[:20]})

@@ -134,7 +134,9 @@ pub struct Interval {
 #[derive(Debug, Clone, Default, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Motion {
-    /// Path length, m: the 3-D distance between consecutive finite positions.
+    /// Path length, m: the 3-D distance between consecutive finite positions (not across
+    /// time that runs back, in a damaged log or logs joined; the armed time's, not across
+    /// a disarmed stretch).
     pub total_distance_m: Option<f64>,
     /// Highest minus lowest altitude, m.
     pub max_altitude_diff_m: Option<f64>,
@@ -523,6 +525,7 @@ impl Analyzer {
     pub fn row(&mut self, meta: &Metadata, row: &Row<'_>) {
         if !self.started {
             self.started = true;
+            self.state.start(meta);
             self.diagnostics.start(meta);
         }
         let i = row.subscription.index();
@@ -573,7 +576,7 @@ impl Analyzer {
             self.fields.row(k, row.data);
         }
         if let Some(f) = &route.motion {
-            self.motion.row(f, row.data, &self.state);
+            self.motion.row(f, row.data, t, &self.state);
         }
         if let Some(f) = &route.sensors {
             self.sensors.row(f, row.data, t, &self.state);
@@ -653,8 +656,9 @@ impl Analyzer {
     }
 
     /// The analysis, with what the log's metadata adds (parameters, defaults).
-    pub fn finish(self, meta: &Metadata) -> Analysis {
+    pub fn finish(mut self, meta: &Metadata) -> Analysis {
         let end = self.last_timestamp;
+        self.modes.sort_changes();
         let mut missing = Vec::new();
         let mut a = Analysis::default();
         if self.parts.core {
@@ -667,7 +671,7 @@ impl Analyzer {
         if self.parts.core {
             (a.battery, a.gps_quality, a.vibration, a.gps_track) =
                 self.sensors.finish(meta, &self.modes, &mut missing);
-            a.diagnostics = self.diagnostics.finish(end);
+            a.diagnostics = self.diagnostics.finish(end, &mut missing);
             a.non_default_params = params::non_default(meta, &mut missing);
             if self.damaged_bytes > 0 {
                 missing.push(Missing {

@@ -140,6 +140,8 @@ impl Acc {
 pub(super) struct MotionStats {
     all: Acc,
     armed: Acc,
+    /// The last `vehicle_local_position` row's time.
+    last_local_t: Option<u64>,
     seen_local: bool,
     seen_attitude: bool,
     seen_rates: bool,
@@ -180,7 +182,18 @@ fn read3_any(data: &[u8], leaves: &[Leaf; 3]) -> Option<[f64; 3]> {
 }
 
 impl MotionStats {
-    pub(super) fn row(&mut self, f: &Fields, data: &[u8], state: &FlightState) {
+    pub(super) fn row(&mut self, f: &Fields, data: &[u8], t: u64, state: &FlightState) {
+        if let Fields::Local { .. } = f {
+            // The path joins consecutive positions: not across time that ran back (a
+            // damaged log, logs joined), nor, for the armed time's, across a disarmed stretch.
+            if self.last_local_t.replace(t).is_some_and(|prev| t < prev) {
+                self.all.last_pos = None;
+                self.armed.last_pos = None;
+            }
+            if !state.armed {
+                self.armed.last_pos = None;
+            }
+        }
         let accs: &mut [&mut Acc] = if state.armed {
             &mut [&mut self.all, &mut self.armed]
         } else {

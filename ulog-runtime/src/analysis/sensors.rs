@@ -265,8 +265,9 @@ impl Sensors {
                 }
                 if let Some((leaves, deg, m)) = position
                     && fix.is_none_or(|f| f >= 3)
+                    // A point a second, and one where time ran back (logs joined).
                     && g.last_point
-                        .is_none_or(|last| t >= last.saturating_add(1_000_000))
+                        .is_none_or(|last| t >= last.saturating_add(1_000_000) || t < last)
                     && let (Some(lat), Some(lon), Some(alt)) = (
                         leaves[0].f64(data),
                         leaves[1].f64(data),

@@ -2,7 +2,7 @@
 //! state, read from `vehicle_status` and `vehicle_land_detected`; what the other consumers
 //! ask of each row ("was it flying then?"), and what [`Modes`] makes segments of.
 
-use super::modes::Modes;
+use super::modes::{Modes, Version};
 use crate::analysis::LazyIndex;
 use crate::columns::Leaf;
 
@@ -56,6 +56,8 @@ pub(crate) struct FlightState {
     pub(crate) status_seen: bool,
     /// When the vehicle last disarmed or landed, µs.
     pub(crate) last_stop_us: Option<u64>,
+    /// The firmware's version, for the names of the modes.
+    pub(crate) version: Version,
 }
 
 impl FlightState {
@@ -63,6 +65,14 @@ impl FlightState {
     /// restricted to it.
     pub(crate) fn flying(&self) -> bool {
         self.armed && self.in_air.unwrap_or(true)
+    }
+
+    /// Learns the firmware's version from the log's definitions, before the rows.
+    pub(super) fn start(&mut self, meta: &crate::read::Metadata) {
+        self.version = meta
+            .version_info()
+            .filter(|v| v.major > 0)
+            .map(|v| (v.major, v.minor));
     }
 
     pub(super) fn row(&mut self, f: &Fields, data: &[u8], t: u64, modes: &mut Modes) {
@@ -93,11 +103,13 @@ impl FlightState {
                     self.armed = armed;
                 }
                 // The VTOL state: a transition, or flying as the type says (old logs:
-                // `is_rotary_wing`).
+                // `is_rotary_wing`); none while the type is another (0, unknown).
                 let vtol = if get(is_vtol).is_some_and(|v| v != 0.0) {
                     let transition = get(in_transition_mode).is_some_and(|v| v != 0.0);
                     let rotary = match get(vehicle_type) {
-                        Some(v) => Some(v == 1.0),
+                        // ROTARY_WING 1, FIXED_WING 2.
+                        Some(v) if v == 1.0 || v == 2.0 => Some(v == 1.0),
+                        Some(_) => None,
                         None => get(is_rotary_wing).map(|v| v != 0.0),
                     };
                     match (transition, rotary) {

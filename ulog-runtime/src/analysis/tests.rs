@@ -381,6 +381,19 @@ fn ids(a: &Analysis) -> Vec<&str> {
 fn a_normal_flight_reports_its_facts_and_nothing_wrong() {
     let a = analysis(Faults::default());
     assert_eq!(ids(&a), Vec::<&str>::new(), "{:#?}", a.diagnostics);
+    // Every diagnostic had its topics: none is said unchecked.
+    let unchecked: Vec<&str> = a
+        .missing
+        .iter()
+        .map(|m| m.fact.as_str())
+        .filter(|f| {
+            f.ends_with("_failure")
+                || f.starts_with("battery_")
+                || f.ends_with("_loss")
+                || f == &"gps_interference"
+        })
+        .collect();
+    assert!(unchecked.is_empty(), "{unchecked:?}");
     assert_eq!(
         modes(&a),
         [
@@ -638,6 +651,12 @@ fn what_a_log_lacks_is_said() {
         "battery",
         "gps_quality, gps_track",
         "vibration",
+        // No finding where nothing could be checked: said, not silent.
+        "battery_brownout",
+        "ekf_failure",
+        "gps_interference",
+        "motor_failure",
+        "rc_loss",
     ] {
         assert!(facts.contains(&fact), "{fact}: {facts:?}");
     }
@@ -921,4 +940,333 @@ fn field_statistics_past_their_limit_are_said_missing() {
         "{}",
         said.reason
     );
+}
+
+/// A topic's rows: each one's timestamp and the bytes after it.
+type Rows = Vec<(u64, Vec<u8>)>;
+
+/// A log of raw rows: each format and its rows, with `ver_sw_release` when given.
+fn raw_log(version: Option<u32>, topics: &[(&str, Rows)]) -> Analysis {
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    if let Some(v) = version {
+        w.info(
+            "ver_sw_release",
+            &crate::Value::Scalar(crate::value::Scalar::UInt32(v)),
+        )
+        .unwrap();
+    }
+    for (format, _) in topics {
+        w.format(format).unwrap();
+    }
+    let subs: Vec<_> = topics
+        .iter()
+        .map(|(format, _)| w.subscribe(format.split(':').next().unwrap(), 0).unwrap())
+        .collect();
+    // The rows of every topic in time order (file order where times are equal).
+    let mut rows: Vec<(u64, usize, &[u8])> = topics
+        .iter()
+        .enumerate()
+        .flat_map(|(k, (_, rows))| rows.iter().map(move |(t, r)| (*t, k, r.as_slice())))
+        .collect();
+    rows.sort_by_key(|&(t, k, _)| (t, k));
+    for (t, k, rest) in rows {
+        let mut row = t.to_le_bytes().to_vec();
+        row.extend_from_slice(rest);
+        w.data(subs[k], &row).unwrap();
+    }
+    let bytes = w.into_inner();
+    Analysis::of_log(&Log::from_slice(&bytes).unwrap())
+}
+
+const STATUS: &str = "vehicle_status:uint64_t timestamp;uint8_t nav_state;uint8_t arming_state;";
+
+/// `vehicle_status` rows every 100 ms from `from` s to `to` s: armed, in one mode.
+fn armed_status(from: u64, to: u64, nav: u8) -> Rows {
+    (from * 10..to * 10)
+        .map(|k| (k * 100_000, vec![nav, 2]))
+        .collect()
+}
+
+/// Rows of one `bool` (or `uint8_t`) every 100 ms from 1 s to 20 s: 1 from 8 s to 12 s.
+fn flag_rows() -> Rows {
+    (10..200u64)
+        .map(|k| (k * 100_000, vec![u8::from((80..120).contains(&k))]))
+        .collect()
+}
+
+/// The version's `ver_sw_release`: a release.
+fn release(major: u32, minor: u32) -> Option<u32> {
+    Some((major << 24) | (minor << 16) | 0xff)
+}
+
+#[test]
+fn mode_names_follow_the_firmware_version_where_px4_reused_a_number() {
+    let names = |version: Option<u32>| {
+        let navs = [6u8, 7, 8, 9, 16, 23, 30, 31];
+        let rows: Rows = navs
+            .iter()
+            .enumerate()
+            .map(|(k, &n)| (1_000_000 * (k as u64 + 1), vec![n, 1]))
+            .collect();
+        let a = raw_log(version, &[(STATUS, rows)]);
+        a.flight_modes
+            .iter()
+            .map(|m| m.mode.clone())
+            .collect::<Vec<_>>()
+    };
+    let always = [
+        "Return to groundstation",
+        "Land (GPS fail)",
+        "Rattitude",
+        "External 1",
+        "External 8",
+        "Unknown",
+    ];
+    let with = |six: &str, eight: &str| {
+        let mut v = vec![six.to_owned(), always[0].to_owned(), eight.to_owned()];
+        v.extend(always[1..].iter().map(|s| (*s).to_owned()));
+        v
+    };
+    assert_eq!(
+        names(release(1, 14)),
+        with("RC Recovery", "Land (engine fail)")
+    );
+    assert_eq!(
+        names(release(1, 15)),
+        with("Position Slow", "Land (engine fail)")
+    );
+    assert_eq!(
+        names(release(1, 17)),
+        with("Position Slow", "Altitude Cruise")
+    );
+    assert_eq!(names(None), with("Unknown", "Unknown"));
+    // A build that writes 0 says no version.
+    assert_eq!(names(Some(0)), with("Unknown", "Unknown"));
+}
+
+#[test]
+fn the_heading_test_ratio_counts_where_the_magnetometer_ratio_is_gone() {
+    let ratios = |fields: &str| {
+        let format = format!("estimator_status:uint64_t timestamp;{fields}");
+        let n = fields.matches(';').count();
+        // Every ratio 2.0 from 8 s to 12 s, 0.5 otherwise.
+        let rows = (10..200u64)
+            .map(|k| {
+                let r: f32 = if (80..120).contains(&k) { 2.0 } else { 0.5 };
+                (k * 100_000, r.to_le_bytes().repeat(n))
+            })
+            .collect();
+        let a = raw_log(
+            release(1, 16),
+            &[(STATUS, armed_status(0, 21, 2)), (&format, rows)],
+        );
+        a.diagnostics
+            .iter()
+            .map(|d| match &d.evidence {
+                Evidence::EkfFailure { innovation, .. } => innovation.clone(),
+                e => panic!("{e:?}"),
+            })
+            .collect::<Vec<_>>()
+    };
+    // PX4 1.16's estimator_status.
+    assert_eq!(ratios("float hdg_test_ratio;"), ["heading"]);
+    // Where both are, the magnetometer's (the heading's would repeat it).
+    assert_eq!(
+        ratios("float mag_test_ratio;float hdg_test_ratio;"),
+        ["magnetometer"]
+    );
+}
+
+#[test]
+fn rc_loss_is_read_from_rc_failsafe_and_from_the_topics_of_other_px4_versions() {
+    let found = |topics: &[(&str, Rows)]| {
+        let mut all = vec![(STATUS, armed_status(0, 21, 2))];
+        all.extend(topics.iter().cloned());
+        let a = raw_log(release(1, 15), &all);
+        let sources: Vec<String> = a
+            .diagnostics
+            .iter()
+            .map(|d| match &d.evidence {
+                Evidence::RcLoss {
+                    source,
+                    signal_lost_duration_ms,
+                    ..
+                } => {
+                    assert_eq!(*signal_lost_duration_ms, 4_000, "{d:?}");
+                    source.clone()
+                }
+                e => panic!("{e:?}"),
+            })
+            .collect();
+        let unchecked = a.missing.iter().any(|m| m.fact == "rc_loss");
+        (sources, unchecked)
+    };
+    // A receiver that keeps sending frames in failsafe: rc_lost stays 0.
+    let failsafe_only: Rows = flag_rows()
+        .into_iter()
+        .map(|(t, f)| (t, vec![0, f[0]]))
+        .collect();
+    assert_eq!(
+        found(&[(
+            "input_rc:uint64_t timestamp;bool rc_lost;bool rc_failsafe;",
+            failsafe_only
+        )]),
+        (vec!["input_rc".to_owned()], false)
+    );
+    assert_eq!(
+        found(&[(
+            "failsafe_flags:uint64_t timestamp;bool manual_control_signal_lost;",
+            flag_rows()
+        )]),
+        (vec!["failsafe_flags".to_owned()], false)
+    );
+    let old_status = "vehicle_status:uint64_t timestamp;uint8_t nav_state;uint8_t arming_state;bool rc_signal_lost;";
+    let old_rows: Rows = flag_rows()
+        .into_iter()
+        .map(|(t, f)| (t, vec![2, 2, f[0]]))
+        .collect();
+    let a = raw_log(None, &[(old_status, old_rows.clone())]);
+    assert_eq!(a.diagnostics.len(), 1, "{:?}", a.diagnostics);
+    assert!(
+        matches!(&a.diagnostics[0].evidence, Evidence::RcLoss { source, .. } if source == "vehicle_status")
+    );
+    // Where `input_rc` is, the others are not read: its signal was never lost.
+    let steady: Rows = flag_rows().into_iter().map(|(t, _)| (t, vec![0])).collect();
+    let a = raw_log(
+        None,
+        &[
+            (old_status, old_rows),
+            ("input_rc:uint64_t timestamp;bool rc_lost;", steady),
+        ],
+    );
+    assert!(a.diagnostics.is_empty(), "{:?}", a.diagnostics);
+    // Without any source, the check is said not made.
+    assert_eq!(found(&[]), (vec![], true));
+}
+
+#[test]
+fn gps_interference_is_read_from_sensor_gps_in_a_log_without_vehicle_gps_position() {
+    let gps = |topic: &str| {
+        (
+            format!("{topic}:uint64_t timestamp;uint8_t fix_type;float eph;"),
+            (10..200u64)
+                .map(|k| {
+                    let eph: f32 = if (80..120).contains(&k) { 30.0 } else { 1.0 };
+                    let mut r = vec![3u8];
+                    r.extend(eph.to_le_bytes());
+                    (k * 100_000, r)
+                })
+                .collect::<Vec<_>>(),
+        )
+    };
+    let (sensor, rows) = gps("sensor_gps");
+    let a = raw_log(
+        None,
+        &[(STATUS, armed_status(0, 21, 2)), (&sensor, rows.clone())],
+    );
+    assert_eq!(a.diagnostics.len(), 1, "{:?}", a.diagnostics);
+    assert!(matches!(&a.diagnostics[0].evidence,
+        Evidence::GpsInterference { source, .. } if source == "sensor_gps"));
+    // Beside a steady vehicle_gps_position, the receiver's own topic is not judged.
+    let (vehicle, _) = gps("vehicle_gps_position");
+    let steady: Rows = rows
+        .iter()
+        .map(|(t, _)| {
+            let mut r = vec![3u8];
+            r.extend(1.0f32.to_le_bytes());
+            (*t, r)
+        })
+        .collect();
+    let a = raw_log(
+        None,
+        &[
+            (STATUS, armed_status(0, 21, 2)),
+            (&sensor, rows),
+            (&vehicle, steady),
+        ],
+    );
+    assert!(a.diagnostics.is_empty(), "{:?}", a.diagnostics);
+}
+
+/// Parts of logs joined (time runs back twice, as in the corpus's
+/// `corrupt_format_not_utf8.ulg`): the path does not jump back between the parts, each part
+/// has its own mode segment and armed interval, and the GPS track has points in each.
+#[test]
+fn time_that_runs_back_starts_new_segments_and_a_new_path() {
+    let local = "vehicle_local_position:uint64_t timestamp;float x;float y;float z;";
+    let gps = "vehicle_gps_position:uint64_t timestamp;int32_t lat;int32_t lon;int32_t alt;uint8_t fix_type;";
+    // Three parts, in file order: 50-60 s, 20-30 s, 5-10 s; each moves 1 m a second
+    // along x from its own far-away start.
+    let parts = [
+        (50u64, 60u64, 1_000.0f32),
+        (20, 30, -2_000.0),
+        (5, 10, 5_000.0),
+    ];
+    let mut w = Writer::new(Vec::new(), WriterOptions::default()).unwrap();
+    for f in [STATUS, local, gps] {
+        w.format(f).unwrap();
+    }
+    let status = w.subscribe("vehicle_status", 0).unwrap();
+    let position = w.subscribe("vehicle_local_position", 0).unwrap();
+    let fix = w.subscribe("vehicle_gps_position", 0).unwrap();
+    for (from, to, x0) in parts {
+        for k in from * 10..=to * 10 {
+            let t = k * 100_000;
+            let mut row = t.to_le_bytes().to_vec();
+            row.extend([2u8, 2]);
+            w.data(status, &row).unwrap();
+            let x = x0 + (k - from * 10) as f32 / 10.0;
+            let mut row = t.to_le_bytes().to_vec();
+            for v in [x, 0.0, -10.0] {
+                row.extend(v.to_le_bytes());
+            }
+            w.data(position, &row).unwrap();
+            let mut row = t.to_le_bytes().to_vec();
+            for v in [473_977_000i32, 85_456_000, 500_000] {
+                row.extend(v.to_le_bytes());
+            }
+            row.push(3);
+            w.data(fix, &row).unwrap();
+        }
+    }
+    let bytes = w.into_inner();
+    let a = Analysis::of_log(&Log::from_slice(&bytes).unwrap());
+    // 10 + 10 + 5 m, not the kilometres between the parts.
+    let d = a.stats.all.total_distance_m.unwrap();
+    assert!((d - 25.0).abs() < 1e-3, "{d}");
+    assert_eq!(
+        modes(&a),
+        [
+            ("Position", 5_000_000, 10_000_000),
+            ("Position", 20_000_000, 30_000_000),
+            ("Position", 50_000_000, 60_000_000)
+        ]
+    );
+    let armed: Vec<(u64, u64)> = a.armed.iter().map(|i| (i.start_us, i.end_us)).collect();
+    assert_eq!(
+        armed,
+        [
+            (5_000_000, 10_000_000),
+            (20_000_000, 30_000_000),
+            (50_000_000, 60_000_000)
+        ]
+    );
+    // A point a second in each part (11 + 11 + 6), each with the part's mode.
+    assert_eq!(a.gps_track.len(), 28);
+    assert!(a.gps_track.iter().all(|p| p.mode_id == Some(2)));
+}
+
+#[test]
+fn a_vtol_of_unknown_type_has_no_vtol_state() {
+    let format = "vehicle_status:uint64_t timestamp;uint8_t nav_state;uint8_t arming_state;uint8_t vehicle_type;bool is_vtol;bool in_transition_mode;";
+    let rows = |vehicle_type: u8| -> Rows {
+        (1..20u64)
+            .map(|k| (k * 100_000, vec![2, 2, vehicle_type, 1, 0]))
+            .collect()
+    };
+    let states =
+        |a: &Analysis| -> Vec<String> { a.vtol_states.iter().map(|v| v.state.clone()).collect() };
+    assert_eq!(states(&raw_log(None, &[(format, rows(2))])), ["FW"]);
+    assert_eq!(states(&raw_log(None, &[(format, rows(1))])), ["MC"]);
+    assert!(states(&raw_log(None, &[(format, rows(0))])).is_empty());
 }

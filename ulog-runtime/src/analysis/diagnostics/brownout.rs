@@ -130,6 +130,11 @@ impl Brownout {
         }
     }
 
+    /// Whether any row was taken.
+    pub(crate) fn seen(&self) -> bool {
+        !self.batteries.is_empty()
+    }
+
     pub(crate) fn finish(mut self, end: u64) -> Vec<Diagnostic> {
         for (m, b) in &mut self.batteries {
             if let Some((start, stop)) = b.episode.close(end)

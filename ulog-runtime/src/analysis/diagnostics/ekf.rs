@@ -1,7 +1,9 @@
 //! EKF innovation failure: in flight, one of `estimator_status`'s innovation test ratios
-//! (velocity, position, height, magnetometer, airspeed, sideslip) above 1 (the innovation
-//! outside its gate) for at least 2 s without a break: a warning, critical from 5 s. One
-//! finding per episode, per estimator instance and innovation.
+//! (velocity, position, height, magnetometer, airspeed, sideslip; from PX4 1.16 on, where
+//! `mag_test_ratio` is gone, heading: `hdg_test_ratio`) above 1 (the innovation outside its
+//! gate) for at least 2 s without a break: a warning, critical from 5 s. A ratio that is not
+//! finite (PX4 writes `inf` while a test has no variance to judge by) neither extends nor
+//! ends an episode. One finding per episode, per estimator instance and innovation.
 
 use super::{Diagnostic, Episode, Evidence, Severity, secs};
 use crate::analysis::LazyIndex;
@@ -15,14 +17,20 @@ pub const WARNING_US: u64 = 2_000_000;
 /// And this long critical.
 pub const CRITICAL_US: u64 = 5_000_000;
 
-const RATIOS: [(&str, &str); 6] = [
+const RATIOS: [(&str, &str); 7] = [
     ("vel_test_ratio", "velocity"),
     ("pos_test_ratio", "position"),
     ("hgt_test_ratio", "height"),
     ("mag_test_ratio", "magnetometer"),
     ("tas_test_ratio", "airspeed"),
     ("beta_test_ratio", "sideslip"),
+    // PX4 1.16's replacement of `mag_test_ratio`: read only where that is absent.
+    ("hdg_test_ratio", "heading"),
 ];
+
+/// [`RATIOS`]' index of `mag_test_ratio`, and of `hdg_test_ratio` that replaced it.
+const MAG: usize = 3;
+const HEADING: usize = 6;
 
 /// Where `estimator_status`'s ratios are.
 pub(crate) struct Fields {
@@ -36,6 +44,11 @@ impl Fields {
             .iter()
             .enumerate()
             .filter_map(|(k, (name, _))| Some((k, index.get(name)?)))
+            .collect();
+        let has_mag = ratios.iter().any(|&(k, _)| k == MAG);
+        let ratios: Vec<(usize, Leaf)> = ratios
+            .into_iter()
+            .filter(|&(k, _)| !(k == HEADING && has_mag))
             .collect();
         (!ratios.is_empty()).then_some(Fields { multi_id, ratios })
     }
@@ -57,7 +70,7 @@ fn slot(f: &Fields, k: usize) -> usize {
 pub(crate) struct Ekf {
     /// In the order they were first seen.
     tracks: Vec<((u8, usize), Track)>,
-    /// Per estimator instance and ratio (`multi_id * 6 + k`): its track's index + 1.
+    /// Per estimator instance and ratio (`multi_id * RATIOS.len() + k`): its track's index + 1.
     slots: Vec<u16>,
     /// Episodes open now, over every track.
     open: usize,
@@ -82,7 +95,7 @@ impl Ekf {
             }
             if self.slots[slot] == 0 {
                 self.tracks.push(((f.multi_id, k), Track::default()));
-                // At most 256 instances × 6 ratios.
+                // At most 256 instances × 7 ratios.
                 self.slots[slot] = self.tracks.len() as u16;
             }
             let track = &mut self.tracks[usize::from(self.slots[slot]) - 1].1;
@@ -108,6 +121,11 @@ impl Ekf {
     /// Whether ratio `k` of `f`'s estimator has a track.
     fn tracks_of(&self, f: &Fields, k: usize) -> bool {
         self.slots.get(slot(f, k)).is_some_and(|&s| s != 0)
+    }
+
+    /// Whether any row was taken.
+    pub(crate) fn seen(&self) -> bool {
+        !self.tracks.is_empty()
     }
 
     pub(crate) fn finish(mut self, end: u64) -> Vec<Diagnostic> {

@@ -1,8 +1,9 @@
-//! GPS interference: once a GPS instance (`vehicle_gps_position`) has held a 3-D fix for
-//! 10 rows, while armed, any of: the horizontal accuracy `eph` above three times its
-//! baseline and 5 m more; the vertical `epv` above three times its baseline and 8 m more;
-//! the satellites used below half their baseline; `jamming_state` warning (2) or
-//! critical (3); the fix lost; for at least 1 s. The baselines are moving averages over
+//! GPS interference: once a GPS instance (`vehicle_gps_position`; in a log without it,
+//! `sensor_gps`) has held a 3-D fix for 10 rows, while armed, any of: the horizontal
+//! accuracy `eph` above three times its baseline and 5 m more; the vertical `epv` above
+//! three times its baseline and 8 m more; the satellites used below half their baseline;
+//! `jamming_state` 2 (warning; PX4 1.17 names it mitigated) or 3 (critical; 1.17:
+//! detected); the fix lost; for at least 1 s. The baselines are moving averages over
 //! the rows without any of these. Critical when the fix was lost, `eph` passed 10 m or
 //! jamming was critical; a warning otherwise. A log that never gets a fix reports nothing.
 
@@ -16,8 +17,10 @@ pub const SETTLE_ROWS: u32 = 10;
 /// How long a condition must last, µs.
 pub const MIN_DURATION_US: u64 = 1_000_000;
 
-/// Where the GPS topic's fields are.
+/// Where the GPS topic's fields are, and whether the topic is `sensor_gps` (read only in
+/// a log without `vehicle_gps_position`).
 pub(crate) struct Fields {
+    sensor: bool,
     multi_id: u8,
     fix: Leaf,
     eph: Option<Leaf>,
@@ -29,8 +32,9 @@ pub(crate) struct Fields {
 }
 
 impl Fields {
-    pub(crate) fn bind(multi_id: u8, index: &LazyIndex<'_>) -> Option<Fields> {
+    pub(crate) fn bind(topic: &str, multi_id: u8, index: &LazyIndex<'_>) -> Option<Fields> {
         Some(Fields {
+            sensor: topic == "sensor_gps",
             multi_id,
             fix: index.get("fix_type")?,
             eph: index.get("eph"),
@@ -69,18 +73,20 @@ struct Worst {
 /// Every receiver's state, and the episodes found.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Interference {
-    receivers: Vec<(u8, Receiver)>,
-    found: Vec<(u8, u64, u64, Worst)>,
+    /// Per (`sensor_gps`?, instance).
+    receivers: Vec<((bool, u8), Receiver)>,
+    found: Vec<((bool, u8), u64, u64, Worst)>,
 }
 
 impl Interference {
     #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
     pub(crate) fn row(&mut self, f: &Fields, data: &[u8], t: u64, state: &FlightState) {
         let get = |l: Option<Leaf>| l.and_then(|l| l.f64(data)).filter(|v| v.is_finite());
-        let r = match self.receivers.iter().position(|(m, _)| *m == f.multi_id) {
+        let key = (f.sensor, f.multi_id);
+        let r = match self.receivers.iter().position(|(k, _)| *k == key) {
             Some(i) => &mut self.receivers[i].1,
             None => {
-                self.receivers.push((f.multi_id, Receiver::default()));
+                self.receivers.push((key, Receiver::default()));
                 &mut self.receivers.last_mut().expect("pushed").1
             }
         };
@@ -154,11 +160,18 @@ impl Interference {
             && let Some(w) = r.worst.take()
             && end - start >= MIN_DURATION_US
         {
-            self.found.push((f.multi_id, start, end, w));
+            self.found.push((key, start, end, w));
         }
     }
 
+    /// Whether any GPS row was seen.
+    pub(crate) fn seen(&self) -> bool {
+        !self.receivers.is_empty()
+    }
+
     pub(crate) fn finish(mut self, end: u64) -> Vec<Diagnostic> {
+        // `sensor_gps` only in a log without `vehicle_gps_position`.
+        let sensor = self.receivers.iter().all(|((sensor, _), _)| *sensor);
         for (m, r) in &mut self.receivers {
             if let Some((start, stop)) = r.episode.close(end)
                 && let Some(w) = r.worst.take()
@@ -169,7 +182,8 @@ impl Interference {
         }
         self.found
             .into_iter()
-            .map(|(multi_id, start, end, w)| Diagnostic {
+            .filter(|((s, _), ..)| *s == sensor)
+            .map(|((sensor, multi_id), start, end, w)| Diagnostic {
                 id: "gps_interference".to_owned(),
                 summary: format!(
                     "GPS {multi_id} degraded for {:.1} s from {:.1} s ({}): eph up to {:.1} m \
@@ -190,6 +204,12 @@ impl Interference {
                 timestamp_us: start,
                 end_timestamp_us: Some(end),
                 evidence: Evidence::GpsInterference {
+                    source: if sensor {
+                        "sensor_gps"
+                    } else {
+                        "vehicle_gps_position"
+                    }
+                    .to_owned(),
                     multi_id,
                     eph_m: w.eph,
                     epv_m: w.epv,

@@ -60,7 +60,7 @@ pub enum Evidence {
     EkfFailure {
         /// The estimator instance.
         multi_id: u8,
-        /// `velocity`, `position`, `height`, `magnetometer`, `airspeed` or `sideslip`.
+        /// `velocity`, `position`, `height`, `magnetometer`, `airspeed`, `sideslip` or `heading`.
         innovation: String,
         /// The highest ratio of the episode.
         test_ratio: f64,
@@ -69,7 +69,9 @@ pub enum Evidence {
     },
     /// [`gps`].
     GpsInterference {
-        /// The GPS instance.
+        /// The topic: `vehicle_gps_position`, or `sensor_gps` in a log without it.
+        source: String,
+        /// Its instance.
         multi_id: u8,
         /// The worst horizontal accuracy of the episode, m.
         eph_m: f64,
@@ -105,7 +107,10 @@ pub enum Evidence {
     },
     /// [`rc`].
     RcLoss {
-        /// The `input_rc` instance.
+        /// The topic the loss was read from: `input_rc`, `failsafe_flags` or
+        /// `vehicle_status`.
+        source: String,
+        /// Its instance.
         multi_id: u8,
         /// The last time a signal was received, µs.
         last_signal_timestamp_us: u64,
@@ -146,9 +151,13 @@ impl Fields {
         match topic {
             "battery_status" => brownout::Fields::bind(multi_id, index).map(Fields::Battery),
             "estimator_status" => ekf::Fields::bind(multi_id, index).map(Fields::Estimator),
-            "vehicle_gps_position" => gps::Fields::bind(multi_id, index).map(Fields::Gps),
+            "vehicle_gps_position" | "sensor_gps" => {
+                gps::Fields::bind(topic, multi_id, index).map(Fields::Gps)
+            }
             "actuator_outputs" => motor::Fields::bind(multi_id, index).map(Fields::Outputs),
-            "input_rc" => rc::Fields::bind(multi_id, index).map(Fields::Rc),
+            "input_rc" | "failsafe_flags" | "vehicle_status" => {
+                rc::Fields::bind(topic, multi_id, index).map(Fields::Rc)
+            }
             _ => None,
         }
     }
@@ -180,8 +189,45 @@ impl Diagnostics {
         self.brownout.start(meta);
     }
 
-    /// Every finding, by start time.
-    pub(crate) fn finish(self, end: u64) -> Vec<Diagnostic> {
+    /// Every finding, by start time; a diagnostic whose topics the log lacks is said in
+    /// `missing` (no finding there means "not checked", not "nothing wrong").
+    pub(crate) fn finish(self, end: u64, missing: &mut Vec<super::Missing>) -> Vec<Diagnostic> {
+        let unchecked = [
+            (
+                self.brownout.seen(),
+                "battery_brownout",
+                "the log has no battery_status rows with a voltage",
+            ),
+            (
+                self.ekf.seen(),
+                "ekf_failure",
+                "the log has no estimator_status rows with a finite innovation test ratio",
+            ),
+            (
+                self.gps.seen(),
+                "gps_interference",
+                "the log has no vehicle_gps_position or sensor_gps rows with a fix type",
+            ),
+            (
+                self.motor.seen(),
+                "motor_failure",
+                "the log has no actuator_outputs rows",
+            ),
+            (
+                self.rc.source().is_some(),
+                "rc_loss",
+                "the log has no input_rc, failsafe_flags or vehicle_status rows that say \
+                 whether the RC signal is lost",
+            ),
+        ];
+        for (seen, fact, reason) in unchecked {
+            if !seen {
+                missing.push(super::Missing {
+                    fact: fact.to_owned(),
+                    reason: reason.to_owned(),
+                });
+            }
+        }
         let mut out = Vec::new();
         out.extend(self.brownout.finish(end));
         out.extend(self.ekf.finish(end));

@@ -170,7 +170,9 @@ impl Motors {
             .iter()
             .map(|&k| g.channels[k].max)
             .fold(f64::NEG_INFINITY, f64::max);
-        let mode = state.nav_state.map_or("Unknown", mode_name);
+        let mode = state
+            .nav_state
+            .map_or("Unknown", |n| mode_name(n, state.version));
         for &k in &motors {
             let mut others: Vec<f64> = motors
                 .iter()
@@ -208,6 +210,11 @@ impl Motors {
             }
             c.last = t;
         }
+    }
+
+    /// Whether any row was taken.
+    pub(crate) fn seen(&self) -> bool {
+        !self.groups.is_empty()
     }
 
     pub(crate) fn finish(mut self) -> Vec<Diagnostic> {
