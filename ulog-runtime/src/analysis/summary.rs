@@ -11,7 +11,8 @@ const SHOWN_INTERVALS: usize = 6;
 fn opt(v: Option<f64>, unit: &str) -> String {
     v.map_or_else(
         || "-".to_owned(),
-        |v| format!("{v:.2} {unit}").trim_end().to_owned(),
+        // `+ 0.0`: a negative zero (a battery's current of -0.0 A) shown as 0.00.
+        |v| format!("{:.2} {unit}", v + 0.0).trim_end().to_owned(),
     )
 }
 

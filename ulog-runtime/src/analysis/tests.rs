@@ -1270,3 +1270,25 @@ fn a_vtol_of_unknown_type_has_no_vtol_state() {
     assert_eq!(states(&raw_log(None, &[(format, rows(1))])), ["MC"]);
     assert!(states(&raw_log(None, &[(format, rows(0))])).is_empty());
 }
+
+/// A current sensor that reads -0.0 A (seen on a real log's idle battery): 0.00 A in the
+/// summary, not "-0.00".
+#[test]
+fn a_negative_zero_current_reads_as_zero() {
+    let rows: Rows = (1..20u64)
+        .map(|k| {
+            let mut r = 16.0f32.to_le_bytes().to_vec();
+            r.extend((-0.0f32).to_le_bytes());
+            (k * 100_000, r)
+        })
+        .collect();
+    let a = raw_log(
+        None,
+        &[(
+            "battery_status:uint64_t timestamp;float voltage_v;float current_a;",
+            rows,
+        )],
+    );
+    let text = a.to_string();
+    assert!(text.contains("current mean 0.00 A max 0.00 A"), "{text}");
+}
