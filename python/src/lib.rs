@@ -31,5 +31,19 @@ fn _ulog(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(tools::cli_main, m)?)?;
     m.add_function(wrap_pyfunction!(tools::log_names, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
-    Ok(())
+    load_numpy_api(m.py())
+}
+
+/// Loads numpy's C API now rather than at the first array a read makes. Loading it runs
+/// Python code (numpy's version check), and a signal handler that raises there (a load
+/// timeout's `SIGALRM`, as Flight Review sets one) made the numpy crate panic in the middle
+/// of the first `ULog(...)`: a `PanicException`, which `except Exception` does not catch,
+/// instead of the handler's exception. Here such a failure is an `ImportError`.
+fn load_numpy_api(py: Python<'_>) -> PyResult<()> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        numpy::PyArray1::<u8>::zeros(py, 0, false);
+    }))
+    .map_err(|_| {
+        pyo3::exceptions::PyImportError::new_err("ulog: numpy's C API could not be loaded")
+    })
 }

@@ -2,12 +2,16 @@
 pyulog script uses, equal; arrays of the same dtype, bit for bit."""
 
 import io
+import pickle
+import subprocess
+import sys
 
 import numpy as np
 import pyulog
 import pytest
 
 import ulog
+from conftest import known_log
 
 ATTRIBUTES = [
     "_debug", "_file_corrupt", "_start_timestamp", "_last_timestamp", "_msg_info_dict",
@@ -169,6 +173,68 @@ def test_strict_strings_raise_unicode_errors():
     flags[9] = 1
     with pytest.raises(ulog.ULogIncompatibleFlagException):
         ulog.ULog(io.BytesIO(build(("B", bytes(flags)))))
+    # A program that imported pyulog (as this test did) catches them with pyulog's own
+    # classes too: `except pyulog.ULogException` where it switched `ULog` alone.
+    with pytest.raises(pyulog.ULogException, match="Header too short") as e:
+        ulog.ULog(io.BytesIO(b"ULog"))
+    assert isinstance(e.value, ulog.NotAULogError)
+    with pytest.raises(pyulog.ULogIncompatibleFlagException) as e:
+        ulog.ULog(io.BytesIO(build(("B", bytes(flags)))))
+    assert isinstance(e.value, ulog.UnsupportedFlagError)
+    # Pickled as the package's own class.
+    again = pickle.loads(pickle.dumps(e.value))
+    assert type(again) is ulog.UnsupportedFlagError and again.args == e.value.args
+
+
+def run_python(code: str) -> str:
+    """What a fresh interpreter prints running `code` (the package on its path)."""
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=False
+    )
+    assert out.returncode == 0, out.stdout + out.stderr
+    return out.stdout
+
+
+def test_without_pyulog_imported_the_errors_are_the_packages_alone():
+    printed = run_python(
+        "import io, sys, ulog\n"
+        "try:\n"
+        "    ulog.ULog(io.BytesIO(b'ULog'))\n"
+        "except ulog.NotAULogError as e:\n"
+        "    print([c.__name__ for c in type(e).__mro__], 'pyulog' in sys.modules)\n"
+    )
+    assert printed.split("]")[0] == "['NotAULogError', 'ULogError', 'Exception', 'BaseException', 'object'"
+    assert printed.strip().endswith("False")
+
+
+def test_star_import_leaves_the_builtin_open():
+    # `from ulog import *` in place of `from pyulog import *` (Flight Review's import).
+    printed = run_python(
+        "import builtins\nfrom ulog import *\nprint(open is builtins.open, ULog.__name__)"
+    )
+    assert printed.split() == ["True", "ULog"]
+
+
+def test_a_timeout_signal_during_the_first_read_raises_the_handlers_exception():
+    # Flight Review bounds a log's load with SIGALRM and a handler that raises. In a fresh
+    # process the first read used to load numpy's C API, running Python code there: the
+    # handler's exception made the numpy crate panic (a PanicException, which
+    # `except Exception` does not catch). Alarms from 0.2 ms to 30 ms into the read.
+    log = known_log("pyulog/sample.ulg")
+    for delay in (0.0002, 0.001, 0.003, 0.01, 0.03):
+        printed = run_python(
+            "import signal, ulog\n"
+            "class Timeout(Exception): pass\n"
+            "def handler(signum, frame): raise Timeout()\n"
+            "signal.signal(signal.SIGALRM, handler)\n"
+            f"signal.setitimer(signal.ITIMER_REAL, {delay})\n"
+            "try:\n"
+            f"    ulog.ULog({str(log)!r}); print('read')\n"
+            "except Timeout:\n"
+            "    print('timeout')\n"
+            "signal.setitimer(signal.ITIMER_REAL, 0)\n"
+        )
+        assert printed.strip() in ("read", "timeout"), (delay, printed)
 
 
 def damaged_copies(data: bytes, seed: str, count: int):

@@ -400,9 +400,11 @@ def test_threads_read_logs_at_once(corpus_log):
 
 def test_the_package_shows_only_its_public_names():
     # What `dir(ulog)` and tab completion show is what `__all__` promises (submodules
-    # aside), and every name of `__all__` is there.
+    # aside), and `ulog.open`, which `__all__` leaves out so that `from ulog import *`
+    # does not hide the built-in `open`; and every name of `__all__` is there.
     public = {n for n in dir(ulog) if not n.startswith("_") and not inspect.ismodule(getattr(ulog, n))}
-    assert public == {n for n in ulog.__all__ if not n.startswith("_")}
+    assert public == {n for n in ulog.__all__ if not n.startswith("_")} | {"open"}
+    assert "open" not in ulog.__all__
     assert all(hasattr(ulog, n) for n in ulog.__all__)
     # The same of `ulog.spark` (importable without pyspark), which imports typing names.
     from ulog import spark

@@ -30,9 +30,10 @@ __all__ = [
     "ULogIncompatibleFlagException",
     "UnsupportedFlagError",
     "__version__",
-    "open",
     "to_parquet",
 ]
+# Not `open`: `from ulog import *` in place of `from pyulog import *` (as Flight Review
+# imports pyulog) must not hide the built-in `open`. It is `ulog.open`.
 
 
 def __getattr__(name: str):

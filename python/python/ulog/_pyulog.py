@@ -13,6 +13,7 @@ import contextlib
 import copy
 import os
 import struct
+import sys
 from types import SimpleNamespace
 from typing import Any, BinaryIO, Dict, Iterable, List, Optional, Tuple, Union
 
@@ -159,6 +160,8 @@ class ULog:
             source = bytes(log_file.read())
         try:
             r = _ulog.read_pyulog(source, filt, strict, parse_header_only, base, recover)
+        except (_ulog.NotAULogError, _ulog.UnsupportedFlagError) as e:
+            raise _as_pyulogs(e) from None
         finally:
             if not isinstance(log_file, str):
                 log_file.close()
@@ -627,3 +630,38 @@ class ULog:
 
 def _message(msg_type: int, data) -> bytes:
     return struct.pack("<HB", len(data), msg_type) + bytes(data)
+
+
+# Per (this package's class, pyulog's): the class made a subclass of both.
+_PYULOG_ERRORS: Dict[Tuple[type, type], type] = {}
+
+
+def _as_pyulogs(e: Exception) -> Exception:
+    """``e`` as an exception that pyulog's own ``except`` clauses catch too
+    (``pyulog.exceptions.ULogException``, ``ULogIncompatibleFlagException``), where the
+    program has imported pyulog; else ``e`` itself (pyulog is never imported here)."""
+    exceptions = sys.modules.get("pyulog.exceptions")
+    if exceptions is None:
+        return e
+    if isinstance(e, _ulog.UnsupportedFlagError):
+        theirs = exceptions.ULogIncompatibleFlagException
+    else:
+        theirs = exceptions.ULogException
+    ours = type(e)
+    if issubclass(ours, theirs):
+        # pyulog's names bound to this package's classes (as its test suite runs here).
+        return e
+    cls = _PYULOG_ERRORS.get((ours, theirs))
+    if cls is None:
+        cls = type(
+            ours.__name__,
+            (ours, theirs),
+            {
+                "__module__": ours.__module__,
+                "__doc__": ours.__doc__,
+                # Pickled as this package's class (this one is made at run time).
+                "__reduce__": lambda self: (ours, self.args),
+            },
+        )
+        _PYULOG_ERRORS[(ours, theirs)] = cls
+    return cls(*e.args)

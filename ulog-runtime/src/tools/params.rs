@@ -31,7 +31,9 @@ pub enum DefaultKind {
 pub struct ParamsOptions {
     /// The format.
     pub format: ParamsFormat,
-    /// Only the initial values (`-i`; csv and octave).
+    /// Only the initial values (`-i`; csv and octave). With `timestamps`, the changes are
+    /// still listed, each stamped with the header's start time, as pyulog stamps them when
+    /// it reads a log for `-i` (it reads no data rows then).
     pub initial: bool,
     /// Only the parameters that changed during the log (csv; not in pyulog).
     pub changed: bool,
@@ -136,7 +138,15 @@ pub fn params(
                 if options.timestamps {
                     write!(out, "\ntimestamp{d}0")?;
                     for c in changes {
-                        write!(out, "{d}{}", c.timestamp)?;
+                        // With `-i` pyulog reads the log with an empty topic filter: no
+                        // data row moves its clock on, so every change is stamped with the
+                        // header's start time.
+                        let t = if options.initial {
+                            log.header().start_timestamp
+                        } else {
+                            c.timestamp
+                        };
+                        write!(out, "{d}{t}")?;
                     }
                 }
                 writeln!(out)?;
