@@ -69,13 +69,13 @@ fn hand_built(messages: &[ulog_runtime::read::Message<'_>]) -> Vec<u8> {
 }
 
 /// Runs pyulog's `ulog2csv` if pyulog is installed (required under CI).
-fn ulog2csv(file: &Path, dir: &Path) -> bool {
+fn ulog2csv(file: &Path, dir: &Path) -> Option<String> {
     ulog2csv_with(file, dir, &[])
 }
 
-/// [`ulog2csv`] with more options.
-fn ulog2csv_with(file: &Path, dir: &Path, options: &[&str]) -> bool {
-    let ok = Command::new("python3")
+/// [`ulog2csv`] with more options: what it printed, if it ran.
+fn ulog2csv_with(file: &Path, dir: &Path, options: &[&str]) -> Option<String> {
+    let out = Command::new("python3")
         .args([
             "-c",
             "import sys; from pyulog.ulog2csv import main; sys.argv[0] = 'ulog2csv'; main()",
@@ -85,12 +85,14 @@ fn ulog2csv_with(file: &Path, dir: &Path, options: &[&str]) -> bool {
         .arg(dir)
         .args(options)
         .output()
-        .is_ok_and(|o| o.status.success());
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8(o.stdout).unwrap());
     assert!(
-        ok || !under_ci(),
+        out.is_some() || !under_ci(),
         "under CI pyulog must be installed (.ci/run does it)"
     );
-    ok
+    out
 }
 
 fn csv_files(dir: &Path) -> BTreeMap<String, String> {
@@ -123,11 +125,11 @@ fn csv_equals_ulog2csv_on_every_corpus_file() {
         let name = short_name(&path);
         let ours = temp_dir("ours");
         let theirs = temp_dir("theirs");
-        stdout(&["csv", path.to_str().unwrap(), "-o", ours.to_str().unwrap()]);
-        if !ulog2csv(&path, &theirs) {
+        let printed = stdout(&["csv", path.to_str().unwrap(), "-o", ours.to_str().unwrap()]);
+        let Some(theirs_printed) = ulog2csv(&path, &theirs) else {
             eprintln!("pyulog not installed: nothing to compare ulog csv with");
             return;
-        }
+        };
         let (ours_files, theirs_files) = (csv_files(&ours), csv_files(&theirs));
         assert_eq!(
             ours_files.keys().collect::<Vec<_>>(),
@@ -137,6 +139,14 @@ fn csv_equals_ulog2csv_on_every_corpus_file() {
         // Rows pyulog cannot see (it resumes after damage only at a sync magic) are set aside.
         let log = ulog_runtime::Log::open(&path).unwrap();
         let blind = pyulog_blind_ranges(&log);
+        // What it prints too (the folders differ), where pyulog sees every row.
+        if blind.is_empty() {
+            assert_eq!(
+                printed.replace(ours.to_str().unwrap(), "DIR"),
+                theirs_printed.replace(theirs.to_str().unwrap(), "DIR"),
+                "{name}: what ulog2csv prints"
+            );
+        }
         let stem = path.file_stem().unwrap().to_string_lossy();
         for (file, text) in &ours_files {
             files += 1;
@@ -282,7 +292,7 @@ fn csv_options_select_topics_time_and_delimiter() {
     );
     let every = listed("", "every");
     assert_eq!(every.len(), log.topics().len(), "{every:?}");
-    if ulog2csv_with(&path, &dir.join("theirs"), &["-m", ""]) {
+    if ulog2csv_with(&path, &dir.join("theirs"), &["-m", ""]).is_some() {
         let theirs = csv_files(&dir.join("theirs"))
             .into_keys()
             .collect::<Vec<_>>();
@@ -795,6 +805,8 @@ fn pyulog_option_spellings_are_accepted() {
     let l = log.to_str().unwrap();
     let out = dir.join("out");
     let o = out.to_str().unwrap();
+    // Made first: each run then prints the same (no "Creating output directory").
+    std::fs::create_dir_all(&out).unwrap();
     // ulog2csv's -ts/-te (and --time_s/--time_e) are --start/--end.
     let short = stdout(&["csv", l, "-o", o, "-ts", "3723.3", "-te", "3723.6"]);
     let long = stdout(&[
@@ -803,7 +815,31 @@ fn pyulog_option_spellings_are_accepted() {
     let ours = stdout(&["csv", l, "-o", o, "--start", "3723.3", "--end", "3723.6"]);
     assert_eq!(short, ours);
     assert_eq!(long, ours);
-    assert!(ours.contains("(3 rows)"), "{ours}");
+    // The window's 3 rows in each instance's file (what is printed counts the whole log's,
+    // as ulog2csv's lines do).
+    let rows: Vec<usize> = csv_files(&out)
+        .values()
+        .map(|text| text.lines().count() - 1)
+        .collect();
+    assert_eq!(rows, [3, 3], "{ours}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// ulog2csv's `-te 0` is no bound (Python's truth test of the option): every row, as
+/// without it, in the same files as ulog2csv writes.
+#[test]
+fn csv_end_of_zero_is_no_bound_as_in_ulog2csv() {
+    let dir = temp_dir("end-zero");
+    let log = snapshot_log(&dir);
+    let l = log.to_str().unwrap();
+    let (zero, none, theirs) = (dir.join("zero"), dir.join("none"), dir.join("theirs"));
+    stdout(&["csv", l, "-o", zero.to_str().unwrap(), "-te", "0"]);
+    stdout(&["csv", l, "-o", none.to_str().unwrap()]);
+    assert_eq!(csv_files(&zero), csv_files(&none));
+    assert!(csv_files(&zero).values().any(|t| t.lines().count() > 1));
+    if ulog2csv_with(&log, &theirs, &["-te", "0"]).is_some() {
+        assert_eq!(csv_files(&zero), csv_files(&theirs));
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -1086,7 +1122,11 @@ fn csv_and_json_say_what_they_skip() {
         dir.join("out").to_str().unwrap(),
     ]);
     assert!(out.status.success());
-    assert!(out.stdout.is_empty());
+    // As ulog2csv says it; no file.
+    assert_eq!(
+        String::from_utf8(out.stdout).unwrap(),
+        format!("Creating output directory {}\n", dir.join("out").display())
+    );
     let l = log.display();
     assert_eq!(
         String::from_utf8(out.stderr).unwrap(),

@@ -35,7 +35,10 @@ pub(crate) struct Args {
 
 pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     let messages = crate::cli::topic_list(&args.messages);
-    let window = crate::cli::window(args.start, args.end)?;
+    // A bound of 0 is none, as in ulog2csv (whose test of a bound is Python's truth: `-te 0`
+    // writes every row there).
+    let bound = |b: Option<f64>| b.filter(|&s| s != 0.0);
+    let window = crate::cli::window(bound(args.start), bound(args.end))?;
     let log = crate::cli::open(&args.file)?;
     crate::cli::check_utf8(&log, &args.file, args.ignore, "-i")?;
     crate::cli::check_topics(&log, &args.file, &messages)?;
@@ -45,7 +48,11 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     };
     let dir = match &args.output {
         Some(d) => {
+            let created = !d.is_dir();
             crate::cli::output_folder(d)?;
+            if created {
+                writeln!(out, "Creating output directory {}", d.display())?;
+            }
             d.clone()
         }
         None => args.file.parent().map(Path::to_owned).unwrap_or_default(),
@@ -69,8 +76,18 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
             );
         }
     }
-    for f in &written {
-        writeln!(out, "{} ({} rows)", f.path.display(), f.rows)?;
+    // What ulog2csv prints: a line per file, by topic and instance, with the instance's
+    // rows in the whole log (not only the window's).
+    let topics = log.topics();
+    let mut lines: Vec<_> = written.iter().collect();
+    lines.sort_by(|a, b| (&a.topic, a.multi_id).cmp(&(&b.topic, b.multi_id)));
+    for f in lines {
+        let rows: usize = topics
+            .iter()
+            .filter(|t| t.name == f.topic && t.multi_id == f.multi_id)
+            .map(|t| t.rows)
+            .sum();
+        writeln!(out, "Writing {} ({rows} data points)", f.path.display())?;
     }
     if options.window.is_bounded() && !written.is_empty() && written.iter().all(|f| f.rows == 0) {
         // Where the rows of the topics asked for lie (the header's start can be later than
