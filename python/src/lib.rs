@@ -40,8 +40,10 @@ fn _ulog(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// of the first `ULog(...)`: a `PanicException`, which `except Exception` does not catch,
 /// instead of the handler's exception. Here such a failure is an `ImportError`.
 fn load_numpy_api(py: Python<'_>) -> PyResult<()> {
+    // The lightest call that loads it (no array: no more of numpy's code touched than a
+    // read touches anyway).
     std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        numpy::PyArray1::<u8>::zeros(py, 0, false);
+        numpy::npyffi::is_numpy_2(py);
     }))
     .map_err(|_| {
         pyo3::exceptions::PyImportError::new_err("ulog: numpy's C API could not be loaded")
