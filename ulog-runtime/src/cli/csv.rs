@@ -82,23 +82,22 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     let mut lines: Vec<_> = written.iter().collect();
     lines.sort_by(|a, b| (&a.topic, a.multi_id).cmp(&(&b.topic, b.multi_id)));
     for f in lines {
-        let rows: usize = topics
+        let rows = topics
             .iter()
-            .filter(|t| t.name == f.topic && t.multi_id == f.multi_id)
-            .map(|t| t.rows)
-            .sum();
+            .find(|t| t.name == f.topic && t.multi_id == f.multi_id)
+            .map_or(0, |t| t.rows);
         writeln!(out, "Writing {} ({rows} data points)", f.path.display())?;
     }
     if options.window.is_bounded() && !written.is_empty() && written.iter().all(|f| f.rows == 0) {
         // Where the rows of the topics asked for lie (the header's start can be later than
         // the first row).
-        let topics: Vec<_> = log
-            .topics()
-            .into_iter()
-            .filter(|t| messages.is_empty() || messages.contains(&t.name))
-            .collect();
-        let first = topics.iter().filter_map(|t| t.first_timestamp).min();
-        let last = topics.iter().filter_map(|t| t.last_timestamp).max();
+        let asked = || {
+            topics
+                .iter()
+                .filter(|t| messages.is_empty() || messages.contains(&t.name))
+        };
+        let first = asked().filter_map(|t| t.first_timestamp).min();
+        let last = asked().filter_map(|t| t.last_timestamp).max();
         crate::cli::report_empty_window(&args.file, &options.window, first.zip(last));
     }
     crate::cli::report_skipped(

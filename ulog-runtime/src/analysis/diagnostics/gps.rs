@@ -170,8 +170,9 @@ impl Interference {
     }
 
     pub(crate) fn finish(mut self, end: u64) -> Vec<Diagnostic> {
-        // `sensor_gps` only in a log without `vehicle_gps_position`.
-        let sensor = self.receivers.iter().all(|((sensor, _), _)| *sensor);
+        // The best source the log has, as the RC loss picks its own: `sensor_gps` (true)
+        // only in a log without `vehicle_gps_position` (false).
+        let best = self.receivers.iter().map(|((sensor, _), _)| *sensor).min();
         for (m, r) in &mut self.receivers {
             if let Some((start, stop)) = r.episode.close(end)
                 && let Some(w) = r.worst.take()
@@ -182,7 +183,7 @@ impl Interference {
         }
         self.found
             .into_iter()
-            .filter(|((s, _), ..)| *s == sensor)
+            .filter(|((s, _), ..)| Some(*s) == best)
             .map(|((sensor, multi_id), start, end, w)| Diagnostic {
                 id: "gps_interference".to_owned(),
                 summary: format!(
