@@ -45,7 +45,9 @@ WORK = {
     ),
 }
 
-# json is imported once the peak is taken: `ulog` imports it, pyulog does not.
+# json is imported once the peak is taken: `ulog` imports it, pyulog does not. After it, the
+# memory of the extension module's mappings (its code and read-only data, in KiB, Linux only):
+# how much of the peak is the module (`python/link/hot_symbols.py` says why it is small).
 CHILD = """
 import resource, sys, time
 import numpy, {library}
@@ -55,7 +57,18 @@ t = time.perf_counter()
 wall = time.perf_counter() - t
 rss_mib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 import json
-print(json.dumps({{"wall": wall, "rss_mib": rss_mib, "rows": n}}))
+module_kib = 0
+try:
+    ours = False
+    for line in open("/proc/self/smaps"):
+        first = line.split()
+        if "-" in first[0] and ":" not in first[0]:
+            ours = line.rstrip().endswith(".so") and "/ulog/_ulog" in line
+        elif ours and first[0] == "Rss:":
+            module_kib += int(first[1])
+except OSError:
+    pass
+print(json.dumps({{"wall": wall, "rss_mib": rss_mib, "rows": n, "module_kib": module_kib}}))
 """
 
 
@@ -138,11 +151,13 @@ def main():
     med = {n: (statistics.median(x["wall"] for x in v), statistics.median(x["rss_mib"] for x in v))
            for n, v in results.items()}
     rows = {n: v[0]["rows"] for n, v in results.items()}
+    module = {n: statistics.median(x["module_kib"] for x in v) for n, v in results.items()}
     base = med["pyulog.ULog"]
     for n, (wall, rss) in med.items():
         print(f"  {n:<22} wall {wall:8.3f} s   peak RSS {rss:8.1f} MiB   rows {rows[n]:>10}"
               f"   pyulog/this: wall {base[0] / wall:6.1f}x, RSS {rss - base[1]:+7.1f} MiB"
-              f" ({rss / base[1]:.3f} of pyulog's)")
+              f" ({rss / base[1]:.3f} of pyulog's)"
+              + (f", module mapped {module[n]:.0f} KiB" if module[n] else ""))
 
 
 if __name__ == "__main__":
