@@ -46,7 +46,7 @@ WORK = {
 }
 
 # json is imported once the peak is taken: `ulog` imports it, pyulog does not. After it, the
-# memory of the extension module's mappings (its code and read-only data, in KiB, Linux only):
+# memory of the extension module's mappings (its code, read-only data and data, in KiB; Linux):
 # how much of the peak is the module (`python/link/hot_symbols.py` says why it is small).
 CHILD = """
 import resource, sys, time

@@ -85,8 +85,8 @@ for p in sys.argv[1:]:
 
 
 def functions_run(callgrind_out: Path, obj: str) -> list:
-    """The functions of the object whose path ends with `obj` that ran, in the file's order
-    (callgrind names an object or function once in full, later by its number)."""
+    """The functions of the object whose path ends with `obj` that ran, once each, in the
+    file's order (callgrind names an object or function once in full, later by its number)."""
     names = {"ob": {}, "fn": {}}
     current = None
     seen, out = set(), []
@@ -139,7 +139,8 @@ def main() -> None:
             )
             (wheel,) = wheels.glob("*.whl")
             with zipfile.ZipFile(wheel) as z:
-                so = Path(z.extract("ulog/_ulog.abi3.so", Path(tmp) / "unpacked"))
+                (member,) = [n for n in z.namelist() if re.fullmatch(r"ulog/_ulog[^/]*\.so", n)]
+                so = Path(z.extract(member, Path(tmp) / "unpacked"))
         if b".symtab" not in so.read_bytes():
             sys.exit(f"{so} has no symbols: build it with `maturin build --strip false`")
         pkg = Path(tmp) / "ulog"
@@ -148,28 +149,41 @@ def main() -> None:
         # Bytecode first, as an installed package has it: compiling is not a read.
         subprocess.run([sys.executable, "-m", "compileall", "-q", str(pkg)], check=True)
         env = dict(os.environ, PYTHONPATH=tmp)
+        for _, logs, _ in WORKLOADS:
+            for log in logs:
+                if not (Path(args.corpus) / log).is_file():
+                    sys.exit(f"{Path(args.corpus) / log} not found: --corpus (or ULOG_CORPUS) "
+                             "names the corpus folder")
         for k, (what, logs, body) in enumerate(WORKLOADS):
             out = Path(tmp) / f"callgrind.{k}"
             indented = "\n".join("    " + l for l in body.strip().splitlines())
-            subprocess.run(
+            run = subprocess.run(
                 [
                     "valgrind", "--tool=callgrind", "--demangle=no",
                     f"--callgrind-out-file={out}",
                     sys.executable, "-c", CHILD.format(body=indented),
                     *(str(Path(args.corpus) / log) for log in logs),
                 ],
-                env=env, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                # Run from the copy's folder: a `-c` script's first import path is the
+                # current folder, which could hold another `ulog`.
+                env=env, cwd=tmp, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
             )
-            new = [f for f in functions_run(out, "_ulog.abi3.so") if f not in seen]
+            if run.returncode != 0:
+                sys.exit(f"{what}: failed under callgrind:\n{run.stderr[-3000:]}")
+            # Sorted within a workload (callgrind's order varies from run to run; the
+            # workload's functions are packed together either way).
+            new = sorted(f for f in functions_run(out, "_ulog.abi3.so") if f not in seen)
             seen.update(new)
             listed.append((what, new))
             print(f"{what}: {len(new)} more functions", file=sys.stderr)
 
+    rustc = subprocess.run(["rustc", "-V"], capture_output=True, text=True).stdout.strip()
     with open(args.out, "w") as f:
         f.write(
             "# The extension's functions that common reads run, placed first in its code by\n"
             "# the linker (python/build.rs). Written by python/link/hot_symbols.py: run it\n"
-            "# again rather than edit this.\n"
+            "# again rather than edit this. The names are those of this rustc's build:\n"
+            f"# {rustc}\n"
         )
         f.write("# run at load by the C runtime\n")
         f.writelines(n + "\n" for n in AT_LOAD if n not in seen)
