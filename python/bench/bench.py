@@ -61,7 +61,7 @@ module_kib = 0
 try:
     ours = False
     for line in open("/proc/self/smaps"):
-        first = line.split()
+        first = line.split() or [""]
         if "-" in first[0] and ":" not in first[0]:
             ours = line.rstrip().endswith(".so") and "/ulog/_ulog" in line
         elif ours and first[0] == "Rss:":
