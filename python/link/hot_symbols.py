@@ -125,6 +125,8 @@ def main() -> None:
     )
     ap.add_argument("--out", default=str(HERE / "hot-symbols.txt"))
     args = ap.parse_args()
+    # Absolute: the children run in another folder.
+    corpus = Path(args.corpus).resolve()
     if not shutil.which("valgrind"):
         sys.exit("hot_symbols.py needs valgrind")
     listed, seen = [], set()
@@ -151,8 +153,8 @@ def main() -> None:
         env = dict(os.environ, PYTHONPATH=tmp)
         for _, logs, _ in WORKLOADS:
             for log in logs:
-                if not (Path(args.corpus) / log).is_file():
-                    sys.exit(f"{Path(args.corpus) / log} not found: --corpus (or ULOG_CORPUS) "
+                if not (corpus / log).is_file():
+                    sys.exit(f"{corpus / log} not found: --corpus (or ULOG_CORPUS) "
                              "names the corpus folder")
         for k, (what, logs, body) in enumerate(WORKLOADS):
             out = Path(tmp) / f"callgrind.{k}"
@@ -162,7 +164,7 @@ def main() -> None:
                     "valgrind", "--tool=callgrind", "--demangle=no",
                     f"--callgrind-out-file={out}",
                     sys.executable, "-c", CHILD.format(body=indented),
-                    *(str(Path(args.corpus) / log) for log in logs),
+                    *(str(corpus / log) for log in logs),
                 ],
                 # Run from the copy's folder: a `-c` script's first import path is the
                 # current folder, which could hold another `ulog`.
