@@ -81,6 +81,24 @@ const UNSUBSCRIBED: DataKind = DataKind {
     timestamp: NO_U64_TIMESTAMP,
 };
 
+/// A run of the fast path in progress ([`Framer::run_start`]): where it is in the window and
+/// what it has taken, kept by the caller (in registers) until [`Framer::run_end`].
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct FastRun {
+    /// Index of the next message in the window.
+    p: usize,
+    /// Where taken messages must end ([`Framer::end_max`]).
+    end_max: usize,
+    /// Index before which messages must start.
+    stop: usize,
+    /// Whether to fetch the bytes ahead into the cache.
+    ahead: bool,
+    /// Index of the last message taken.
+    last: Option<usize>,
+    /// The largest timestamp taken.
+    latest: u64,
+}
+
 /// A `D` message the fast path takes ([`Framer::peek_data`]).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct PeekedRow {
@@ -170,45 +188,66 @@ impl Framer {
         limit: u64,
         mut f: impl FnMut(PeekedRow) -> bool,
     ) -> u64 {
-        if self.resync.is_some() || !self.notices.is_empty() {
-            return 0;
-        }
-        let Some(mut p) = self
-            .pos
-            .checked_sub(base)
-            .and_then(|p| usize::try_from(p).ok())
-        else {
+        let Some(mut run) = self.run_start(w, base, limit) else {
             return 0;
         };
-        let end_max = self.end_max(w, base);
-        let stop = usize::try_from(limit.saturating_sub(base)).unwrap_or(usize::MAX);
-        let (mut last, mut latest) = (None, 0);
-        // A walk through a file in memory reads it in order, but each message's header is
-        // found only once the one before is read: the bytes a little ahead are fetched before
-        // they are needed (the hardware's prefetcher stops at each 4 KiB page). A stream's
-        // window was just copied in, and is in the cache already.
-        let ahead = w.len() > PREFETCH_MIN_WINDOW;
-        while p < stop {
-            if ahead {
-                crate::read::log::prefetch(w, (p + PREFETCH_AHEAD) as u64, 1);
-            }
-            let Some(row) = self.data_at(w, p, end_max) else {
-                break;
-            };
-            let (timestamp, end) = (row.timestamp, row.at + MESSAGE_HEADER_LEN + row.size);
-            let more = f(row);
-            latest = latest.max(timestamp);
-            last = Some(p);
-            p = end;
-            if !more {
+        while let Some(row) = self.run_next(&mut run, w) {
+            if !f(row) {
                 break;
             }
         }
-        if let Some(l) = last {
+        self.run_end(run, base)
+    }
+
+    /// Starts a run of the fast path at the current position ([`Framer::data_run`], one row
+    /// at a time: [`Framer::run_next`], then [`Framer::run_end`]), or `None` if the fast path
+    /// does not apply here (mid-recovery, notices to report, the position outside the window).
+    #[inline]
+    pub(crate) fn run_start(&self, w: &[u8], base: u64, limit: u64) -> Option<FastRun> {
+        if self.resync.is_some() || !self.notices.is_empty() {
+            return None;
+        }
+        let p = usize::try_from(self.pos.checked_sub(base)?).ok()?;
+        Some(FastRun {
+            p,
+            end_max: self.end_max(w, base),
+            stop: usize::try_from(limit.saturating_sub(base)).unwrap_or(usize::MAX),
+            // A walk through a file in memory reads it in order, but each message's header
+            // is found only once the one before is read: the bytes a little ahead are
+            // fetched before they are needed (the hardware's prefetcher stops at each 4 KiB
+            // page). A stream's window was just copied in, and is in the cache already.
+            ahead: w.len() > PREFETCH_MIN_WINDOW,
+            last: None,
+            latest: 0,
+        })
+    }
+
+    /// The run's next row, taken (`None`: the run ends here; the framer's position moves
+    /// only at [`Framer::run_end`]). `w` is the window the run started in.
+    #[inline(always)]
+    pub(crate) fn run_next(&self, run: &mut FastRun, w: &[u8]) -> Option<PeekedRow> {
+        if run.p >= run.stop {
+            return None;
+        }
+        if run.ahead {
+            crate::read::log::prefetch(w, (run.p + PREFETCH_AHEAD) as u64, 1);
+        }
+        let row = self.data_at(w, run.p, run.end_max)?;
+        run.latest = run.latest.max(row.timestamp);
+        run.last = Some(run.p);
+        run.p = row.at + MESSAGE_HEADER_LEN + row.size;
+        Some(row)
+    }
+
+    /// Ends a run: the position moves past its rows. Returns the largest timestamp of its
+    /// rows (0 if none).
+    #[inline]
+    pub(crate) fn run_end(&mut self, run: FastRun, base: u64) -> u64 {
+        if let Some(l) = run.last {
             self.prev = Some(base + l as u64);
-            self.pos = base + p as u64;
+            self.pos = base + run.p as u64;
         }
-        latest
+        run.latest
     }
 
     /// Where messages of the window `[base, base + w.len())` must end to be taken by the

@@ -46,7 +46,7 @@ pub use walk::{Summary, fold_rows, fold_rows_on, summarize};
 use crate::error::{Diagnostic, DiagnosticKind, ReadError};
 use crate::schema::{Primitive, Schema};
 use crate::value::{RowPlan, Scalar, Value};
-use framer::{Frame, Framer};
+use framer::{FastRun, Frame, Framer};
 use metadata::Applied;
 
 /// One data row, borrowed from the file.
@@ -152,6 +152,33 @@ impl Walker {
             sub: row.sub,
             timestamp: row.timestamp,
         })
+    }
+
+    /// Starts a run of fast rows at the current position of the window `[base, base +
+    /// w.len())` ([`Framer::run_start`]); `None` if the fast path does not apply here.
+    #[inline]
+    fn run_start(&self, w: &[u8], base: u64) -> Option<FastRun> {
+        self.framer.run_start(w, base, u64::MAX)
+    }
+
+    /// The run's next row ([`Framer::run_next`]), in the window the run started in.
+    #[inline(always)]
+    fn run_next(&self, run: &mut FastRun, w: &[u8], base: u64) -> Option<FastRow> {
+        let r = self.framer.run_next(run, w)?;
+        Some(FastRow {
+            offset: base + r.at as u64,
+            data: r.at + MESSAGE_HEADER_LEN + 2..r.at + MESSAGE_HEADER_LEN + r.size,
+            sub: r.sub,
+            timestamp: r.timestamp,
+        })
+    }
+
+    /// Ends a run of fast rows: the position moves past them, and the metadata's latest
+    /// timestamp takes in theirs.
+    #[inline]
+    fn run_end(&mut self, run: FastRun, base: u64) {
+        let latest = self.framer.run_end(run, base);
+        self.meta.saw_timestamp(latest);
     }
 
     /// The rows of the fast path from the current position on, while they come, before

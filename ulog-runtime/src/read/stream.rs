@@ -287,26 +287,44 @@ impl<R: Read> StreamReader<R> {
     /// # Ok(()) }
     /// ```
     pub fn for_each_event(&mut self, mut f: impl FnMut(Event<'_>)) -> Result<(), ReadError> {
+        // `f` is called from one place, so that the compiler can put it inline in the loop
+        // over a window's rows: a call made for each row costs more than decoding a small
+        // row. The rows of the current window come as long as they come (a run of the fast
+        // path, its position kept here); then one event of the general path, and again.
+        let mut run = None;
+        let mut fresh = true;
         loop {
-            // The rows of the current window, as long as they come.
-            if self.pending.is_none() {
-                let window = self.win.bytes();
-                self.walker
-                    .fast_rows(window, self.win.base, u64::MAX, false, |meta, row| {
-                        f(Event::Row(Row {
-                            timestamp: row.timestamp,
-                            offset: row.offset,
-                            data: &window[row.data],
-                            subscription: &meta.subscriptions[row.sub],
-                            schema: &meta.schema,
-                        }));
-                        true
-                    });
+            if fresh {
+                fresh = false;
+                run = match self.pending {
+                    None => self.walker.run_start(self.win.bytes(), self.win.base),
+                    Some(_) => None,
+                };
             }
-            match self.next_event()? {
-                Some(event) => f(event),
-                None => return Ok(()),
-            }
+            let fast = match run.as_mut() {
+                Some(r) => self.walker.run_next(r, self.win.bytes(), self.win.base),
+                None => None,
+            };
+            let event = match fast {
+                Some(row) => Event::Row(Row {
+                    timestamp: row.timestamp,
+                    offset: row.offset,
+                    data: &self.win.bytes()[row.data],
+                    subscription: &self.walker.meta.subscriptions[row.sub],
+                    schema: &self.walker.meta.schema,
+                }),
+                None => {
+                    if let Some(r) = run.take() {
+                        self.walker.run_end(r, self.win.base);
+                    }
+                    fresh = true;
+                    match self.next_event()? {
+                        Some(event) => event,
+                        None => return Ok(()),
+                    }
+                }
+            };
+            f(event);
         }
     }
 
