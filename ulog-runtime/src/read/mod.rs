@@ -184,24 +184,19 @@ impl Walker {
     /// The rows of the fast path from the current position on, while they come, before
     /// `limit` ([`Framer::data_run`]): each given to `f` with the metadata, until `f` returns
     /// `false`. Returns whether any row was taken. The metadata's latest timestamp takes in
-    /// the run's at its end, or, with `each_time` (for callers that show the metadata to
-    /// users), each row's before the row is given.
+    /// the run's at its end.
     #[inline]
     fn fast_rows(
         &mut self,
         w: &[u8],
         base: u64,
         limit: u64,
-        each_time: bool,
         mut f: impl FnMut(&Metadata, FastRow) -> bool,
     ) -> bool {
-        let meta = &mut self.meta;
+        let meta = &self.meta;
         let mut any = false;
         let latest = self.framer.data_run(w, base, limit, |r| {
             any = true;
-            if each_time {
-                meta.saw_timestamp(r.timestamp);
-            }
             f(
                 meta,
                 FastRow {

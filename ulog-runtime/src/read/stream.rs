@@ -339,7 +339,8 @@ impl<R: Read> StreamReader<R> {
     /// Calls `f` with every event, the message it came from as the file holds it (`None`
     /// for a diagnostic) and the metadata read so far, to the end of the file or the first
     /// error `f` returns: what a tool that copies or rewrites a log needs (the rows of each
-    /// window come in a tight loop, as with [`StreamReader::for_each_event`]).
+    /// window come in a tight loop, as with [`StreamReader::for_each_event`]). After an error,
+    /// the reader stands after the message `f` refused: a later read goes on from there.
     ///
     /// ```no_run
     /// # fn main() -> Result<(), ulog_runtime::ReadError> {
@@ -362,43 +363,59 @@ impl<R: Read> StreamReader<R> {
         &mut self,
         mut f: impl FnMut(&Metadata, Event<'_>, Option<RawMessage<'_>>) -> Result<(), E>,
     ) -> Result<(), E> {
+        // `f` is called from one place, as in `for_each_event`.
+        let mut run = None;
+        let mut fresh = true;
         loop {
-            if self.pending.is_none() {
-                let window = self.win.bytes();
-                let mut failed = None;
-                self.walker
-                    // The metadata is the caller's to read at each row: its latest
-                    // timestamp includes the row's, as off the fast path.
-                    .fast_rows(window, self.win.base, u64::MAX, true, |meta, row| {
-                        let raw = RawMessage {
-                            offset: row.offset,
-                            ty: b'D',
-                            payload: &window[row.data.start - 2..row.data.end],
-                        };
-                        let event = Event::Row(Row {
-                            timestamp: row.timestamp,
-                            offset: row.offset,
-                            data: &window[row.data],
-                            subscription: &meta.subscriptions[row.sub],
-                            schema: &meta.schema,
-                        });
-                        match f(meta, event, Some(raw)) {
-                            Ok(()) => true,
-                            Err(e) => {
-                                failed = Some(e);
-                                false
-                            }
-                        }
-                    });
-                if let Some(e) = failed {
-                    return Err(e);
-                }
+            if fresh {
+                fresh = false;
+                run = match self.pending {
+                    None => self.walker.run_start(self.win.bytes(), self.win.base),
+                    Some(_) => None,
+                };
             }
-            let Some(next) = self.advance()? else {
-                return Ok(());
+            let fast = match run.as_mut() {
+                Some(r) => self.walker.run_next(r, self.win.bytes(), self.win.base),
+                None => None,
             };
-            let event = self.event(next);
-            f(&self.walker.meta, event, self.message())?;
+            let (event, raw) = match fast {
+                Some(row) => {
+                    // The metadata is the caller's to read at each row: its latest timestamp
+                    // includes the row's, as off the fast path.
+                    self.walker.meta.saw_timestamp(row.timestamp);
+                    let window = self.win.bytes();
+                    let raw = RawMessage {
+                        offset: row.offset,
+                        ty: b'D',
+                        payload: &window[row.data.start - 2..row.data.end],
+                    };
+                    let event = Event::Row(Row {
+                        timestamp: row.timestamp,
+                        offset: row.offset,
+                        data: &window[row.data],
+                        subscription: &self.walker.meta.subscriptions[row.sub],
+                        schema: &self.walker.meta.schema,
+                    });
+                    (event, Some(raw))
+                }
+                None => {
+                    if let Some(r) = run.take() {
+                        self.walker.run_end(r, self.win.base);
+                    }
+                    fresh = true;
+                    let Some(next) = self.advance()? else {
+                        return Ok(());
+                    };
+                    (self.event(next), self.message())
+                }
+            };
+            if let Err(e) = f(&self.walker.meta, event, raw) {
+                // The rows given so far are read: a later call goes on after them.
+                if let Some(r) = run.take() {
+                    self.walker.run_end(r, self.win.base);
+                }
+                return Err(e);
+            }
         }
     }
 

@@ -153,7 +153,7 @@ impl<S: RowSink> Collected<S> {
             }
             let (data, base, eof) = src.window();
             let (sink, mut latest) = (&mut self.sink, self.max_timestamp);
-            let taken = walker.fast_rows(data, base, limit, false, |meta, row| {
+            let taken = walker.fast_rows(data, base, limit, |meta, row| {
                 sink.row(meta, row.offset, &data[row.data], row.sub, row.timestamp);
                 latest = latest.max(row.timestamp);
                 true

@@ -900,6 +900,38 @@ fn for_each_message_shows_each_rows_time_in_the_metadata() {
     }
 }
 
+#[test]
+fn for_each_message_stopped_by_an_error_goes_on_after_the_row_it_stopped_at() {
+    // The error comes mid-run of the fast path: the rows given so far are read, and the
+    // next event is the row after the one the callback refused.
+    let (f, _) = clean(95);
+    let all = stream_rows(&f.0, 4096).0;
+    let mut reader = StreamReader::new(&f.0[..]).unwrap();
+    let mut given = Vec::new();
+    let stopped = reader.for_each_message(|_, event, _| {
+        if let Event::Row(row) = &event {
+            given.push(row.offset);
+            if given.len() == 5 {
+                return Err(ReadError::Io(std::io::Error::other("enough")));
+            }
+        }
+        Ok(())
+    });
+    assert!(matches!(stopped, Err(ReadError::Io(_))));
+    let mut rest = Vec::new();
+    reader
+        .for_each_event(|event| {
+            if let Event::Row(row) = &event {
+                rest.push(row.offset);
+            }
+        })
+        .unwrap();
+    let offsets: Vec<u64> = all.iter().map(|r| r.0).collect();
+    assert_eq!(offsets.len(), 95);
+    assert_eq!(given, offsets[..5], "the first five rows, once");
+    assert_eq!(rest, offsets[5..], "then the others, once each");
+}
+
 /// Each subscription's row offsets as [`Log::data`] finds them, row by row.
 fn offsets_row_by_row(log: &Log<'_>) -> Vec<Vec<u64>> {
     let mut by_sub = vec![Vec::new(); log.subscriptions().len()];
