@@ -7,8 +7,8 @@ use super::message::{FileHeader, HEADER_LEN, MessageType};
 use super::metadata::Applied;
 use super::window::{Reading, Window};
 use super::{
-    Diagnostic, Dropout, LoggedMessage, Metadata, ParameterChange, ReadError, Row, Step,
-    Subscription, Walker,
+    Diagnostic, Dropout, FastRow, FastRun, LoggedMessage, Metadata, ParameterChange, ReadError,
+    Row, Step, Subscription, Walker,
 };
 use crate::typed::{Topic, TypedDecoder, TypedError};
 
@@ -294,17 +294,7 @@ impl<R: Read> StreamReader<R> {
         let mut run = None;
         let mut fresh = true;
         loop {
-            if fresh {
-                fresh = false;
-                run = match self.pending {
-                    None => self.walker.run_start(self.win.bytes(), self.win.base),
-                    Some(_) => None,
-                };
-            }
-            let fast = match run.as_mut() {
-                Some(r) => self.walker.run_next(r, self.win.bytes(), self.win.base),
-                None => None,
-            };
+            let fast = self.run_row(&mut run, &mut fresh);
             let event = match fast {
                 Some(row) => Event::Row(Row {
                     timestamp: row.timestamp,
@@ -367,17 +357,7 @@ impl<R: Read> StreamReader<R> {
         let mut run = None;
         let mut fresh = true;
         loop {
-            if fresh {
-                fresh = false;
-                run = match self.pending {
-                    None => self.walker.run_start(self.win.bytes(), self.win.base),
-                    Some(_) => None,
-                };
-            }
-            let fast = match run.as_mut() {
-                Some(r) => self.walker.run_next(r, self.win.bytes(), self.win.base),
-                None => None,
-            };
+            let fast = self.run_row(&mut run, &mut fresh);
             let (event, raw) = match fast {
                 Some(row) => {
                     // The metadata is the caller's to read at each row: its latest timestamp
@@ -417,6 +397,21 @@ impl<R: Read> StreamReader<R> {
                 return Err(e);
             }
         }
+    }
+
+    /// The next row of the fast path in the current window: of the run `run`, or, after an
+    /// event of the general path (`fresh`), of a run started where it left off. `None` ends
+    /// the run (the caller ends it with `Walker::run_end`).
+    #[inline(always)]
+    fn run_row(&self, run: &mut Option<FastRun>, fresh: &mut bool) -> Option<FastRow> {
+        if std::mem::take(fresh) {
+            *run = match self.pending {
+                None => self.walker.run_start(self.win.bytes(), self.win.base),
+                Some(_) => None,
+            };
+        }
+        let r = run.as_mut()?;
+        self.walker.run_next(r, self.win.bytes(), self.win.base)
     }
 
     /// Moves to the next event, recording its message.
