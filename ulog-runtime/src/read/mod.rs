@@ -104,6 +104,19 @@ struct FastRow {
     timestamp: u64,
 }
 
+impl FastRow {
+    /// The row the framer peeked in the window that starts at file offset `base`.
+    #[inline(always)]
+    fn of(row: framer::PeekedRow, base: u64) -> FastRow {
+        FastRow {
+            offset: base + row.at as u64,
+            data: row.at + MESSAGE_HEADER_LEN + 2..row.at + MESSAGE_HEADER_LEN + row.size,
+            sub: row.sub,
+            timestamp: row.timestamp,
+        }
+    }
+}
+
 /// What one step of walking a file produced.
 enum Step<'w> {
     Applied {
@@ -142,16 +155,11 @@ impl Walker {
     /// window `[base, base + w.len())`, of a subscription with a `uint64_t` timestamp).
     #[inline]
     fn fast_row(&mut self, w: &[u8], base: u64) -> Option<FastRow> {
-        let row = self.framer.peek_data(w, base)?;
-        let offset = base + row.at as u64;
-        self.framer.commit(offset, row.size);
+        let peeked = self.framer.peek_data(w, base)?;
+        let row = FastRow::of(peeked, base);
+        self.framer.commit(row.offset, peeked.size);
         self.meta.saw_timestamp(row.timestamp);
-        Some(FastRow {
-            offset,
-            data: row.at + MESSAGE_HEADER_LEN + 2..row.at + MESSAGE_HEADER_LEN + row.size,
-            sub: row.sub,
-            timestamp: row.timestamp,
-        })
+        Some(row)
     }
 
     /// Starts a run of fast rows at the current position of the window `[base, base +
@@ -164,13 +172,7 @@ impl Walker {
     /// The run's next row ([`Framer::run_next`]), in the window the run started in.
     #[inline(always)]
     fn run_next(&self, run: &mut FastRun, w: &[u8], base: u64) -> Option<FastRow> {
-        let r = self.framer.run_next(run, w)?;
-        Some(FastRow {
-            offset: base + r.at as u64,
-            data: r.at + MESSAGE_HEADER_LEN + 2..r.at + MESSAGE_HEADER_LEN + r.size,
-            sub: r.sub,
-            timestamp: r.timestamp,
-        })
+        Some(FastRow::of(self.framer.run_next(run, w)?, base))
     }
 
     /// Ends a run of fast rows: the position moves past them, and the metadata's latest
@@ -197,15 +199,7 @@ impl Walker {
         let mut any = false;
         let latest = self.framer.data_run(w, base, limit, |r| {
             any = true;
-            f(
-                meta,
-                FastRow {
-                    offset: base + r.at as u64,
-                    data: r.at + MESSAGE_HEADER_LEN + 2..r.at + MESSAGE_HEADER_LEN + r.size,
-                    sub: r.sub,
-                    timestamp: r.timestamp,
-                },
-            )
+            f(meta, FastRow::of(r, base))
         });
         if any {
             self.meta.saw_timestamp(latest);

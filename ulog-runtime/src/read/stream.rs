@@ -292,10 +292,8 @@ impl<R: Read> StreamReader<R> {
         // row. The rows of the current window come as long as they come (a run of the fast
         // path, its position kept here); then one event of the general path, and again.
         let mut run = None;
-        let mut fresh = true;
         loop {
-            let fast = self.run_row(&mut run, &mut fresh);
-            let event = match fast {
+            let event = match self.run_row(&mut run) {
                 Some(row) => Event::Row(Row {
                     timestamp: row.timestamp,
                     offset: row.offset,
@@ -304,10 +302,7 @@ impl<R: Read> StreamReader<R> {
                     schema: &self.walker.meta.schema,
                 }),
                 None => {
-                    if let Some(r) = run.take() {
-                        self.walker.run_end(r, self.win.base);
-                    }
-                    fresh = true;
+                    self.end_run(&mut run);
                     match self.next_event()? {
                         Some(event) => event,
                         None => return Ok(()),
@@ -355,10 +350,8 @@ impl<R: Read> StreamReader<R> {
     ) -> Result<(), E> {
         // `f` is called from one place, as in `for_each_event`.
         let mut run = None;
-        let mut fresh = true;
         loop {
-            let fast = self.run_row(&mut run, &mut fresh);
-            let (event, raw) = match fast {
+            let (event, raw) = match self.run_row(&mut run) {
                 Some(row) => {
                     // The metadata is the caller's to read at each row: its latest timestamp
                     // includes the row's, as off the fast path.
@@ -379,10 +372,7 @@ impl<R: Read> StreamReader<R> {
                     (event, Some(raw))
                 }
                 None => {
-                    if let Some(r) = run.take() {
-                        self.walker.run_end(r, self.win.base);
-                    }
-                    fresh = true;
+                    self.end_run(&mut run);
                     let Some(next) = self.advance()? else {
                         return Ok(());
                     };
@@ -391,27 +381,33 @@ impl<R: Read> StreamReader<R> {
             };
             if let Err(e) = f(&self.walker.meta, event, raw) {
                 // The rows given so far are read: a later call goes on after them.
-                if let Some(r) = run.take() {
-                    self.walker.run_end(r, self.win.base);
-                }
+                self.end_run(&mut run);
                 return Err(e);
             }
         }
     }
 
-    /// The next row of the fast path in the current window: of the run `run`, or, after an
-    /// event of the general path (`fresh`), of a run started where it left off. `None` ends
-    /// the run (the caller ends it with `Walker::run_end`).
+    /// The next row of the fast path in the current window: of the run `run`, started where
+    /// the reader stands if there is none (after an event of the general path). `None`: the
+    /// run ends here, and the caller ends it ([`StreamReader::end_run`]) before reading on.
     #[inline(always)]
-    fn run_row(&self, run: &mut Option<FastRun>, fresh: &mut bool) -> Option<FastRow> {
-        if std::mem::take(fresh) {
+    fn run_row(&self, run: &mut Option<FastRun>) -> Option<FastRow> {
+        if run.is_none() {
             *run = match self.pending {
                 None => self.walker.run_start(self.win.bytes(), self.win.base),
                 Some(_) => None,
             };
         }
-        let r = run.as_mut()?;
-        self.walker.run_next(r, self.win.bytes(), self.win.base)
+        self.walker
+            .run_next(run.as_mut()?, self.win.bytes(), self.win.base)
+    }
+
+    /// Ends the run of fast rows, if one is under way: the reader stands after its rows.
+    #[inline]
+    fn end_run(&mut self, run: &mut Option<FastRun>) {
+        if let Some(r) = run.take() {
+            self.walker.run_end(r, self.win.base);
+        }
     }
 
     /// Moves to the next event, recording its message.
