@@ -150,8 +150,9 @@ struct Seen {
 
 /// The streaming reader fed in chunks of random sizes yields what the whole-file reader
 /// yields: the same rows, logged strings, parameter changes and dropouts, and in the end the
-/// same initial parameters, info and multi info. The first byte
-/// gives how many of the next bytes are chunk sizes; the rest is the log.
+/// same initial parameters, info and multi info; event by event and through each of its
+/// loops ([`Loop`]), and refuses every log the whole-file reader refuses, each way. The first
+/// byte gives how many of the next bytes are chunk sizes; the rest is the log.
 pub fn stream_chunks(data: &[u8]) {
     let Some((&n, rest)) = data.split_first() else {
         return;
@@ -179,6 +180,13 @@ pub fn stream_chunks(data: &[u8]) {
             refused,
             "the streaming reader takes a log the whole-file reader refuses"
         );
+        // Its loops too.
+        for how in [Loop::ForEachEvent, Loop::ForEachMessage] {
+            assert!(
+                stream_seen(log, sizes, how).is_err(),
+                "{how:?} takes a log the whole-file reader refuses"
+            );
+        }
         return;
     };
     let mut expected = Seen {
@@ -217,19 +225,98 @@ pub fn stream_chunks(data: &[u8]) {
         expected.rows,
         "the fold by positioned reads and the whole file differ"
     );
+    for how in [Loop::NextEvent, Loop::ForEachEvent, Loop::ForEachMessage] {
+        let (seen, end) = stream_seen(log, sizes, how).expect("reading memory does not fail");
+        assert_eq!(seen, expected, "{how:?}: stream and whole file differ");
+        // What the definitions left when the log ends: the whole-file reader takes it in from
+        // the parts its threads read.
+        assert_eq!(
+            end,
+            facts(whole.metadata()),
+            "{how:?}: initial parameters or info differ between the stream and the whole file"
+        );
+    }
+}
+
+/// The ways through a stream: event by event, and the two loops that take a closure (whose
+/// rows come in runs of the fast path, the closure called from one place).
+#[derive(Debug, Clone, Copy)]
+enum Loop {
+    NextEvent,
+    ForEachEvent,
+    ForEachMessage,
+}
+
+/// What the definitions left when a log ends (as Debug text: a NaN value equals itself
+/// there).
+fn facts(m: &ulog_runtime::read::Metadata) -> String {
+    format!(
+        "{:?}\n{:?}\n{:?}",
+        m.initial_parameters(),
+        m.info(),
+        m.multi_info()
+    )
+}
+
+/// What the streaming reader gives of `log` fed in chunks of `sizes`, read `how`, and the
+/// [`facts`] at its end. `ForEachMessage` also checks that each message it hands over is the
+/// file's own bytes at its offset, and each row's the message its row came from.
+fn stream_seen(
+    log: &[u8],
+    sizes: &[u8],
+    how: Loop,
+) -> Result<(Seen, String), ulog_runtime::ReadError> {
     let input = Chunked {
         data: log,
         sizes,
         turn: 0,
     };
-    let mut reader =
-        StreamReader::new(input).expect("the header read as the whole-file reader read it");
+    let mut reader = StreamReader::new(input)?;
     let mut seen = Seen::default();
-    while let Some(event) = reader.next_event().expect("reading memory does not fail") {
+    match how {
+        Loop::NextEvent => {
+            while let Some(event) = reader.next_event()? {
+                seen.take(event);
+            }
+        }
+        Loop::ForEachEvent => reader.for_each_event(|event| seen.take(event))?,
+        Loop::ForEachMessage => reader.for_each_message(|_, event, raw| {
+            if let Some(m) = raw {
+                let at = usize::try_from(m.offset).expect("an offset in memory");
+                let end = at + 3 + m.payload.len();
+                assert_eq!(
+                    log.get(at..end).map(|b| (b[2], &b[3..])),
+                    Some((m.ty, m.payload)),
+                    "the message at {at} is not the file's bytes"
+                );
+                assert_eq!(
+                    usize::from(u16::from_le_bytes([log[at], log[at + 1]])),
+                    m.payload.len(),
+                    "the message at {at} is not the size its header says"
+                );
+            }
+            if let Event::Row(r) = &event {
+                let m = raw.expect("a row comes with its message");
+                assert_eq!((m.ty, m.offset), (b'D', r.offset), "a row's message");
+                assert_eq!(
+                    m.payload.split_at_checked(2),
+                    Some((&r.subscription.msg_id.to_le_bytes()[..], r.data)),
+                    "a row is its message's msg_id and bytes"
+                );
+            }
+            seen.take(event);
+            Ok::<(), ulog_runtime::ReadError>(())
+        })?,
+    }
+    Ok((seen, facts(reader.metadata())))
+}
+
+impl Seen {
+    fn take(&mut self, event: Event<'_>) {
         match event {
             Event::Row(r) => {
                 let s = r.subscription;
-                seen.rows.push((
+                self.rows.push((
                     r.offset,
                     s.msg_id,
                     s.name.clone(),
@@ -237,28 +324,12 @@ pub fn stream_chunks(data: &[u8]) {
                     r.data.to_vec(),
                 ));
             }
-            Event::Logged(m) => seen.logged.push((m.offset, m.timestamp, m.text)),
-            Event::ParameterChange(c) => seen.changes.push((c.offset, c.name)),
-            Event::Dropout(d) => seen.dropouts.push((d.offset, d.duration_ms)),
+            Event::Logged(m) => self.logged.push((m.offset, m.timestamp, m.text)),
+            Event::ParameterChange(c) => self.changes.push((c.offset, c.name)),
+            Event::Dropout(d) => self.dropouts.push((d.offset, d.duration_ms)),
             _ => {}
         }
     }
-    assert_eq!(seen, expected, "stream and whole file differ");
-    // What the definitions left when the log ends: the whole-file reader takes it in from
-    // the parts its threads read (as Debug text: a NaN value equals itself there).
-    let facts = |m: &ulog_runtime::read::Metadata| {
-        format!(
-            "{:?}\n{:?}\n{:?}",
-            m.initial_parameters(),
-            m.info(),
-            m.multi_info()
-        )
-    };
-    assert_eq!(
-        facts(reader.metadata()),
-        facts(whole.metadata()),
-        "initial parameters or info differ between the stream and the whole file"
-    );
 }
 
 /// The rows `read::fold_file` gives of `log` written to a file of its own (removed after),
