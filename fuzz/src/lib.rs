@@ -260,7 +260,7 @@ fn facts(m: &ulog_runtime::read::Metadata) -> String {
 
 /// What the streaming reader gives of `log` fed in chunks of `sizes`, read `how`, and the
 /// [`facts`] at its end. `ForEachMessage` also checks that each message it hands over is the
-/// file's own bytes at its offset, and each row's the message its row came from.
+/// file's own bytes at its offset, and that each row comes with the message it was read from.
 fn stream_seen(
     log: &[u8],
     sizes: &[u8],
