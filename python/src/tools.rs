@@ -1,6 +1,9 @@
 //! The Parquet converter (`to_parquet`) and the `ulog` command-line tool (`cli_main`).
 
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc;
+use std::time::Duration;
 
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -14,7 +17,8 @@ use ulog_runtime::columns::parquet::{Converter, Layout, ParquetOptions};
 /// `unreadable_topics` as (topic, msg_id, why), `misfit_rows` as (topic, multi_id, rows),
 /// `orphan_rows`, `unusable_messages`, `damaged_bytes`, `ignored_appended_offsets`), `said` (what `ulog parquet` says of
 /// the log on stderr, a line each), or `error`. A log that fails does
-/// not stop the others. The GIL is released while converting.
+/// not stop the others. The GIL is released while converting; a signal whose handler raises
+/// (Ctrl-C) stops it after the logs being converted, and the exception propagates.
 #[pyfunction]
 #[pyo3(signature = (paths, out_dir, layout="per-log", topics=None, threads=None, analysis=true, start=None, end=None))]
 #[allow(clippy::too_many_arguments)]
@@ -66,7 +70,10 @@ pub(crate) fn to_parquet<'py>(
         return Err(pyo3::exceptions::PyKeyError::new_err(message));
     }
     let converter = Converter::new(out_dir, options);
-    let results = py.detach(|| converter.convert_files(&paths, threads));
+    let stop = AtomicBool::new(false);
+    let results = until_signal(py, &stop, || {
+        converter.convert_files_until(&paths, threads, &stop)
+    })?;
     let out = PyList::empty(py);
     for (path, result) in paths.iter().zip(results) {
         let d = PyDict::new(py);
@@ -151,4 +158,46 @@ pub(crate) fn window_words(start: Option<f64>, end: Option<f64>) -> PyResult<Str
     Window::seconds(start, end)
         .map(|w| w.in_words())
         .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))
+}
+
+/// How often a long call looks for a signal Python's handlers have to run.
+const SIGNAL_CHECK: Duration = Duration::from_millis(100);
+
+/// Runs `work` on a thread of its own while this one, the GIL released, looks every
+/// [`SIGNAL_CHECK`] for a signal whose Python handler raises (Ctrl-C's `KeyboardInterrupt`).
+/// Then `stop` is set for `work` to see, `work` is waited for, and the exception is returned;
+/// otherwise `work`'s result.
+fn until_signal<T: Send>(
+    py: Python<'_>,
+    stop: &AtomicBool,
+    work: impl FnOnce() -> T + Send,
+) -> PyResult<T> {
+    std::thread::scope(|scope| {
+        let (tx, mut rx) = mpsc::sync_channel(1);
+        let worker = scope.spawn(move || {
+            // The receiver waits for it while this thread lives.
+            let _ = tx.send(work());
+        });
+        let mut raised = None;
+        loop {
+            let (got, back) = py.detach(move || (rx.recv_timeout(SIGNAL_CHECK), rx));
+            rx = back;
+            match got {
+                Ok(done) => return raised.map_or(Ok(done), Err),
+                Err(mpsc::RecvTimeoutError::Timeout) => {
+                    if raised.is_none()
+                        && let Err(e) = py.check_signals()
+                    {
+                        stop.store(true, Ordering::Relaxed);
+                        raised = Some(e);
+                    }
+                }
+                // `work` panicked (PyO3 makes the panic an exception).
+                Err(mpsc::RecvTimeoutError::Disconnected) => match worker.join() {
+                    Err(panic) => std::panic::resume_unwind(panic),
+                    Ok(()) => unreachable!("a worker that returned sent its result"),
+                },
+            }
+        }
+    })
 }

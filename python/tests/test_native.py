@@ -382,6 +382,95 @@ def test_the_command_line_tool_ships_with_the_package():
     assert run.returncode == 2
 
 
+def many_links(tmp_path, n: int):
+    """`n` logs of distinct names (links to one corpus log), each converted alone in about
+    10 ms: a conversion of all of them lasts long enough to be interrupted."""
+    from conftest import known_log
+
+    src = known_log("pyulog/sample_log_small.ulg")
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    for i in range(n):
+        (logs / f"log{i:03}.ulg").symlink_to(src)
+    return sorted(logs.glob("*.ulg"))
+
+
+def converted_whole(out, n: int):
+    """The logs converted under `out`: each folder complete (its metadata.json written last),
+    none half-written, and fewer than `n`."""
+    done = {p.parent.name for p in out.glob("*/metadata.json")}
+    assert not list(out.rglob("*.partial")), "a file left half-written"
+    assert {p.name for p in out.iterdir()} == done, "a folder of a log not converted"
+    assert 0 < len(done) < n, len(done)
+    return done
+
+
+# Sends SIGINT to its own process once `out` holds a converted log (a Ctrl-C in the middle
+# of the conversion), and prints `interrupted` if the call raised KeyboardInterrupt.
+INTERRUPTED_CONVERSION = """
+import os, signal, sys, threading, time
+import ulog
+from pathlib import Path
+
+logs, out = sorted(Path(sys.argv[1]).glob("*.ulg")), Path(sys.argv[2])
+
+def interrupt():
+    while not any(out.glob("*/metadata.json")):
+        time.sleep(0.001)
+    os.kill(os.getpid(), signal.SIGINT)
+
+threading.Thread(target=interrupt, daemon=True).start()
+try:
+    ulog.to_parquet(logs, out)
+except KeyboardInterrupt:
+    print("interrupted")
+"""
+
+
+def test_ctrl_c_stops_to_parquet_after_the_logs_being_converted(tmp_path):
+    # The GIL is released while converting, and the signal is seen while it runs: the
+    # logs not started yet are left alone (they were all converted before Python's handler
+    # ran), and the exception comes out of the call.
+    n = 300
+    logs = many_links(tmp_path, n)
+    out = tmp_path / "out"
+    run = subprocess.run(
+        [sys.executable, "-c", INTERRUPTED_CONVERSION, str(logs[0].parent), str(out)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert run.stdout.strip() == "interrupted", run.stderr
+    converted_whole(out, n)
+
+
+def test_ctrl_c_ends_the_command_line_tool_at_once(tmp_path):
+    # As the native `ulog` does: killed by the signal at once (Python's handler would have
+    # run only after every log was converted).
+    import signal
+    import time
+
+    n = 300
+    logs = many_links(tmp_path, n)
+    out = tmp_path / "out"
+    tool = subprocess.Popen(
+        [sys.executable, "-m", "ulog", "parquet", *map(str, logs), "-o", str(out)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        while not any(out.glob("*/metadata.json")) and tool.poll() is None:
+            time.sleep(0.001)
+        tool.send_signal(signal.SIGINT)
+        assert tool.wait(timeout=600) == -signal.SIGINT
+    finally:
+        tool.kill()
+    # Killed at once, as the native tool is: the log being written may be left as
+    # `.partial` files, never as a folder that looks converted.
+    done = {p.parent.name for p in out.glob("*/metadata.json")}
+    assert 0 < len(done) < n, len(done)
+
+
 def test_threads_read_logs_at_once(corpus_log):
     # The GIL is released while reading: threads finish, with the same answers.
     results = [None] * 4

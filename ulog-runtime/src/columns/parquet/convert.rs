@@ -60,6 +60,13 @@ pub enum ConvertError {
         /// Why.
         source: ParquetError,
     },
+    /// Not converted: the conversion was told to stop before this log was started
+    /// ([`Converter::convert_files_until`]).
+    #[error("{log}: not converted (the conversion was stopped before this log)")]
+    Stopped {
+        /// The log.
+        log: String,
+    },
 }
 
 /// Converts whole logs to Parquet files in a folder ([module docs](super)).

@@ -1,11 +1,11 @@
 //! Where a conversion's files go ([`Layout`]), which folder a log takes (never another
 //! log's: [`Converter::claim_log_dir`]), and many logs converted at once, in parallel
-//! ([`Converter::convert_files`]).
+//! ([`Converter::convert_files`]), until told to stop ([`Converter::convert_files_until`]).
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use super::convert::{Conversion, ConvertError, Converter};
 use crate::file_names::FileNames;
@@ -189,6 +189,40 @@ impl Converter {
         paths: &[PathBuf],
         threads: usize,
     ) -> Vec<Result<Conversion, ConvertError>> {
+        self.convert_files_until(paths, threads, &AtomicBool::new(false))
+    }
+
+    /// [`convert_files`](Self::convert_files), stopping when `stop` is set (by another
+    /// thread, a signal handler's flag): no log is started after that, and each log not
+    /// started is [`ConvertError::Stopped`]. The logs being converted when it is set are
+    /// finished, so every log's files are either all written or not written at all.
+    ///
+    /// ```no_run
+    /// # use std::path::PathBuf;
+    /// use std::sync::atomic::{AtomicBool, Ordering};
+    /// use ulog_runtime::columns::parquet::{ConvertError, Converter, ParquetOptions};
+    ///
+    /// let stop = AtomicBool::new(false);
+    /// let logs: Vec<PathBuf> = vec!["a.ulg".into(), "b.ulg".into()];
+    /// let converter = Converter::new("fleet", ParquetOptions::default());
+    /// let results = std::thread::scope(|s| {
+    ///     let work = s.spawn(|| converter.convert_files_until(&logs, 2, &stop));
+    ///     // ... on a user's request to stop:
+    ///     stop.store(true, Ordering::Relaxed);
+    ///     work.join().expect("the conversion does not panic")
+    /// });
+    /// let stopped = results
+    ///     .iter()
+    ///     .filter(|r| matches!(r, Err(ConvertError::Stopped { .. })))
+    ///     .count();
+    /// println!("{stopped} logs not converted");
+    /// ```
+    pub fn convert_files_until(
+        &self,
+        paths: &[PathBuf],
+        threads: usize,
+        stop: &AtomicBool,
+    ) -> Vec<Result<Conversion, ConvertError>> {
         let layout = self.options.layout;
         let stems: Vec<String> = paths
             .iter()
@@ -222,7 +256,13 @@ impl Converter {
                 let g = next.fetch_add(1, Ordering::Relaxed);
                 let Some(group) = groups.get(g) else { break };
                 for &i in group {
-                    let result = self.convert_as(&paths[i], &stems[i], encoders);
+                    let result = if stop.load(Ordering::Relaxed) {
+                        Err(ConvertError::Stopped {
+                            log: paths[i].display().to_string(),
+                        })
+                    } else {
+                        self.convert_as(&paths[i], &stems[i], encoders)
+                    };
                     *results[i].lock().unwrap_or_else(|e| e.into_inner()) = Some(result);
                 }
             }

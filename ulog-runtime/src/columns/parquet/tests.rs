@@ -552,6 +552,47 @@ fn hive_layout_partitions_by_topic_log_and_instance() {
 }
 
 #[test]
+fn a_stopped_fleet_conversion_starts_no_log_and_says_so_of_each() {
+    let root = temp("stopped");
+    std::fs::create_dir_all(&root).unwrap();
+    let paths: Vec<PathBuf> = (0..4)
+        .map(|i| {
+            let p = root.join(format!("log{i}.ulg"));
+            std::fs::write(&p, log_bytes(10)).unwrap();
+            p
+        })
+        .collect();
+    let out = root.join("out");
+    let converter = Converter::new(&out, ParquetOptions::default());
+    let stop = std::sync::atomic::AtomicBool::new(true);
+    for threads in [1, 3] {
+        let results = converter.convert_files_until(&paths, threads, &stop);
+        assert_eq!(results.len(), paths.len());
+        for (r, p) in results.iter().zip(&paths) {
+            match r {
+                Err(e @ ConvertError::Stopped { log }) => {
+                    assert_eq!(log, &p.display().to_string());
+                    assert!(e.to_string().contains("not converted"), "{e}");
+                }
+                other => panic!("{}: {other:?}", p.display()),
+            }
+        }
+        assert!(
+            std::fs::read_dir(&out).map_or(true, |d| d.count() == 0),
+            "nothing written"
+        );
+    }
+    // Not stopped: every log converted.
+    stop.store(false, std::sync::atomic::Ordering::Relaxed);
+    let results = converter.convert_files_until(&paths, 2, &stop);
+    assert!(results.iter().all(Result::is_ok), "{results:?}");
+    for i in 0..4 {
+        assert!(out.join(format!("log{i}/metadata.json")).is_file());
+    }
+    std::fs::remove_dir_all(&root).unwrap();
+}
+
+#[test]
 fn write_topic_takes_the_window_and_says_what_it_wrote() {
     let log = crate::Log::from_vec(log_bytes(100)).unwrap();
     let identity = LogIdentity::of_log(&log, "x.ulg");
