@@ -444,9 +444,9 @@ def test_ctrl_c_stops_to_parquet_after_the_logs_being_converted(tmp_path):
     converted_whole(out, n)
 
 
-def test_ctrl_c_ends_the_command_line_tool_at_once(tmp_path):
-    # As the native `ulog` does: killed by the signal at once (Python's handler would have
-    # run only after every log was converted).
+def test_ctrl_c_stops_the_command_line_tool_as_it_stops_the_rust_binary(tmp_path):
+    # `ulog parquet` finishes the logs being converted and exits 130 (Python's handler
+    # would have run only after every log was converted).
     import signal
     import time
 
@@ -456,19 +456,19 @@ def test_ctrl_c_ends_the_command_line_tool_at_once(tmp_path):
     tool = subprocess.Popen(
         [sys.executable, "-m", "ulog", "parquet", *map(str, logs), "-o", str(out)],
         stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
     )
     try:
         while not any(out.glob("*/metadata.json")) and tool.poll() is None:
             time.sleep(0.001)
         tool.send_signal(signal.SIGINT)
-        assert tool.wait(timeout=600) == -signal.SIGINT
+        _, stderr = tool.communicate(timeout=600)
     finally:
         tool.kill()
-    # Killed at once, as the native tool is: the log being written may be left as
-    # `.partial` files, never as a folder that looks converted.
-    done = {p.parent.name for p in out.glob("*/metadata.json")}
-    assert 0 < len(done) < n, len(done)
+    assert tool.returncode == 130, stderr
+    done = converted_whole(out, n)
+    assert f"stopped (signal 2): {n - len(done)} of {n} logs not converted" in stderr
 
 
 def test_threads_read_logs_at_once(corpus_log):

@@ -9,8 +9,9 @@ def main() -> None:
     """Runs ``ulog`` with the process's arguments and exits with its code."""
     from . import _ulog
 
-    # As the native `ulog`: Ctrl-C ends the tool at once. Python's own handler runs only
-    # when the Rust tool returns, after every log of a long run.
+    # As the native `ulog`: Ctrl-C ends the tool (`ulog parquet` sets its own handler, and
+    # finishes the logs under way). Python's handler would run only when the Rust tool
+    # returned, after every log of a long run.
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.SIG_DFL)
     sys.stdout.flush()

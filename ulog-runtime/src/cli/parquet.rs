@@ -4,9 +4,9 @@
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 
-use crate::columns::parquet::{Converter, Layout, ParquetOptions};
+use crate::columns::parquet::{ConvertError, Converter, Layout, ParquetOptions};
 
 use crate::cli::Failure;
 
@@ -103,11 +103,13 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     let threads = args
         .jobs
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let results = converter.convert_files(&args.files, threads);
+    let (stop, signal) = stop_on_signals();
+    let results = converter.convert_files_until(&args.files, threads, &stop);
     if progress {
         eprintln!();
     }
     let mut failed = 0;
+    let mut stopped = 0;
     let mut topics_seen = std::collections::HashSet::new();
     for (path, result) in args.files.iter().zip(&results) {
         match result {
@@ -127,6 +129,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
                 }
                 topics_seen.extend(c.files.iter().map(|f| f.topic.clone()));
             }
+            Err(ConvertError::Stopped { .. }) => stopped += 1,
             Err(e) => {
                 failed += 1;
                 match crate::cli::check_path(path, false) {
@@ -143,6 +146,23 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
             window.in_words()
         );
     }
+    if stopped > 0 {
+        let signal = signal.load(Ordering::Relaxed);
+        let failed = if failed > 0 {
+            format!(", {failed} failed")
+        } else {
+            String::new()
+        };
+        return Err(Failure::exit(
+            // 128 + the signal, as a shell reports a tool the signal ended.
+            u8::try_from(128 + signal).unwrap_or(130),
+            format!(
+                "stopped (signal {signal}): {stopped} of {} logs not converted{failed}; \
+                 those being converted were finished",
+                args.files.len()
+            ),
+        ));
+    }
     if failed > 0 {
         return Err(Failure::exit(
             1,
@@ -150,6 +170,27 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         ));
     }
     Ok(())
+}
+
+/// A flag set at the first Ctrl-C (SIGINT) or SIGTERM, and the signal's number: no log is
+/// started after it, those being converted are finished (every log's files whole or not
+/// written). A second signal ends the tool at once (exit code 128 + the signal), as the
+/// signal alone would have. Where the handlers cannot be set, the signals end the tool at
+/// once, as before.
+fn stop_on_signals() -> (Arc<AtomicBool>, Arc<AtomicUsize>) {
+    let stop = Arc::new(AtomicBool::new(false));
+    let signal = Arc::new(AtomicUsize::new(0));
+    #[cfg(unix)]
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        use signal_hook::flag;
+        // The shutdown first: it acts only once the flag is set, at a second signal.
+        let _ = flag::register_conditional_shutdown(sig, 128 + sig, Arc::clone(&stop))
+            .and_then(|_| {
+                flag::register_usize(sig, Arc::clone(&signal), sig.unsigned_abs() as usize)
+            })
+            .and_then(|_| flag::register(sig, Arc::clone(&stop)));
+    }
+    (stop, signal)
 }
 
 /// A count of 1 or more (`-j`, `--buffer-mb`): 0 would convert nothing, or buffer nothing.

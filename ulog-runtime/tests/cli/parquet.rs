@@ -223,6 +223,101 @@ fn small_log_of(dir: &Path, name: &str, seconds: u64) -> PathBuf {
     path
 }
 
+/// The logs of `out` with a metadata.json (written last of a log's files).
+fn converted(out: &Path) -> Vec<String> {
+    let Ok(dirs) = std::fs::read_dir(out) else {
+        return Vec::new();
+    };
+    let mut done: Vec<String> = dirs
+        .flatten()
+        .filter(|d| d.path().join("metadata.json").is_file())
+        .map(|d| d.file_name().to_string_lossy().into_owned())
+        .collect();
+    done.sort();
+    done
+}
+
+#[cfg(unix)]
+#[test]
+fn ctrl_c_stops_after_the_logs_being_converted_and_twice_at_once() {
+    let dir = temp_dir("parquet-ctrl-c");
+    let n = 100;
+    let first = small_log_of(&dir.join("logs"), "log000.ulg", 3000);
+    let logs: Vec<PathBuf> = (0..n)
+        .map(|i| {
+            let p = dir.join(format!("logs/log{i:03}.ulg"));
+            if i > 0 {
+                std::fs::copy(&first, &p).unwrap();
+            }
+            p
+        })
+        .collect();
+    let out = dir.join("out");
+    for signals in [1, 2] {
+        let _ = std::fs::remove_dir_all(&out);
+        let mut child = Command::new(env!("CARGO_BIN_EXE_ulog"))
+            .arg("parquet")
+            .args(&logs)
+            .arg("-o")
+            .arg(&out)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Ctrl-C once a log is converted.
+        while converted(&out).is_empty() && child.try_wait().unwrap().is_none() {
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+        for _ in 0..signals {
+            let kill = Command::new("kill")
+                .args(["-INT", &child.id().to_string()])
+                .status()
+                .unwrap();
+            assert!(kill.success());
+        }
+        let run = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(
+            run.status.code(),
+            Some(130),
+            "{signals} signal(s): {stderr}"
+        );
+        let done = converted(&out);
+        assert!(
+            !done.is_empty() && done.len() < n,
+            "{signals} signal(s): {} of {n} converted",
+            done.len()
+        );
+        if signals == 1 {
+            // The logs under way finished, whole; none started after.
+            let said = format!(
+                "stopped (signal 2): {} of {n} logs not converted",
+                n - done.len()
+            );
+            assert!(stderr.contains(&said), "{stderr}");
+            let listed = String::from_utf8_lossy(&run.stdout).lines().count();
+            assert_eq!(listed, done.len(), "each converted log listed");
+            let mut folders: Vec<String> = std::fs::read_dir(&out)
+                .unwrap()
+                .flatten()
+                .map(|d| d.file_name().to_string_lossy().into_owned())
+                .collect();
+            folders.sort();
+            assert_eq!(folders, done, "no folder of a log not converted");
+            for d in &done {
+                for f in std::fs::read_dir(out.join(d)).unwrap().flatten() {
+                    let name = f.file_name().to_string_lossy().into_owned();
+                    assert!(!name.ends_with(".partial"), "{d}/{name} left half-written");
+                }
+            }
+        } else {
+            // The second signal ended it at once: no summary.
+            assert!(!stderr.contains("stopped"), "{stderr}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn two_logs_of_one_stem_converted_in_two_runs_keep_both() {
     use sha2::Digest;
