@@ -17,8 +17,9 @@ use ulog_runtime::columns::parquet::{Converter, Layout, ParquetOptions};
 /// `unreadable_topics` as (topic, msg_id, why), `misfit_rows` as (topic, multi_id, rows),
 /// `orphan_rows`, `unusable_messages`, `damaged_bytes`, `ignored_appended_offsets`), `said` (what `ulog parquet` says of
 /// the log on stderr, a line each), or `error`. A log that fails does
-/// not stop the others. The GIL is released while converting; a signal whose handler raises
-/// (Ctrl-C) stops it after the logs being converted, and the exception propagates.
+/// not stop the others. The GIL is released while converting; called from the main thread,
+/// a signal whose handler raises (Ctrl-C) stops it after the logs under way, and the
+/// exception propagates.
 #[pyfunction]
 #[pyo3(signature = (paths, out_dir, layout="per-log", topics=None, threads=None, analysis=true, start=None, end=None))]
 #[allow(clippy::too_many_arguments)]
@@ -126,9 +127,15 @@ pub(crate) fn to_parquet<'py>(
 }
 
 /// Runs the `ulog` tool with `argv` (the program name first); its exit code. The GIL is
-/// released while it runs.
+/// released while it runs. `as_process`: the process is the tool (the package's `ulog`
+/// command), and Ctrl-C or SIGTERM stop it as they stop the Rust binary
+/// (`ulog_runtime::cli::handle_signals`: handlers set for the rest of the process's life).
 #[pyfunction]
-pub(crate) fn cli_main(py: Python<'_>, argv: Vec<std::ffi::OsString>) -> u8 {
+#[pyo3(signature = (argv, as_process=false))]
+pub(crate) fn cli_main(py: Python<'_>, argv: Vec<std::ffi::OsString>, as_process: bool) -> u8 {
+    if as_process {
+        ulog_runtime::cli::handle_signals();
+    }
     py.detach(|| ulog_runtime::cli::main(argv))
 }
 
@@ -164,9 +171,10 @@ pub(crate) fn window_words(start: Option<f64>, end: Option<f64>) -> PyResult<Str
 const SIGNAL_CHECK: Duration = Duration::from_millis(100);
 
 /// Runs `work` on a thread of its own while this one, the GIL released, looks every
-/// [`SIGNAL_CHECK`] for a signal whose Python handler raises (Ctrl-C's `KeyboardInterrupt`).
-/// Then `stop` is set for `work` to see, `work` is waited for, and the exception is returned;
-/// otherwise `work`'s result.
+/// [`SIGNAL_CHECK`] for a signal whose Python handler raises (Ctrl-C's `KeyboardInterrupt`;
+/// Python runs handlers on its main thread only, so from another thread nothing stops
+/// `work`). Then `stop` is set for `work` to see, `work` is waited for (a second signal does
+/// not cut the wait short), and the exception is returned; otherwise `work`'s result.
 fn until_signal<T: Send>(
     py: Python<'_>,
     stop: &AtomicBool,
@@ -180,7 +188,15 @@ fn until_signal<T: Send>(
         });
         let mut raised = None;
         loop {
-            let (got, back) = py.detach(move || (rx.recv_timeout(SIGNAL_CHECK), rx));
+            // The receiver goes into the closure and back: the closure must be `Send`, and
+            // a `Receiver` is not `Sync` (a reference to it is not `Send`). Once an exception
+            // is taken there is nothing more to look for: the wait blocks.
+            let wait = if raised.is_some() {
+                Duration::MAX
+            } else {
+                SIGNAL_CHECK
+            };
+            let (got, back) = py.detach(move || (rx.recv_timeout(wait), rx));
             rx = back;
             match got {
                 Ok(done) => return raised.map_or(Ok(done), Err),

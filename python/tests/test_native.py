@@ -383,8 +383,8 @@ def test_the_command_line_tool_ships_with_the_package():
 
 
 def many_links(tmp_path, n: int):
-    """`n` logs of distinct names (links to one corpus log), each converted alone in about
-    10 ms: a conversion of all of them lasts long enough to be interrupted."""
+    """`n` logs of distinct names (links to one corpus log of 0.9 MB): two at a time, their
+    conversion lasts long enough to be interrupted once the first is converted."""
     from conftest import known_log
 
     src = known_log("pyulog/sample_log_small.ulg")
@@ -421,7 +421,7 @@ def interrupt():
 
 threading.Thread(target=interrupt, daemon=True).start()
 try:
-    ulog.to_parquet(logs, out)
+    ulog.to_parquet(logs, out, threads=2)
 except KeyboardInterrupt:
     print("interrupted")
 """
@@ -445,8 +445,8 @@ def test_ctrl_c_stops_to_parquet_after_the_logs_being_converted(tmp_path):
 
 
 def test_ctrl_c_stops_the_command_line_tool_as_it_stops_the_rust_binary(tmp_path):
-    # `ulog parquet` finishes the logs being converted and exits 130 (Python's handler
-    # would have run only after every log was converted).
+    # `ulog parquet` finishes the logs under way and exits 130 (Python's handler would have
+    # run only after every log was converted, then ended the process with a traceback).
     import signal
     import time
 
@@ -454,7 +454,7 @@ def test_ctrl_c_stops_the_command_line_tool_as_it_stops_the_rust_binary(tmp_path
     logs = many_links(tmp_path, n)
     out = tmp_path / "out"
     tool = subprocess.Popen(
-        [sys.executable, "-m", "ulog", "parquet", *map(str, logs), "-o", str(out)],
+        [sys.executable, "-m", "ulog", "parquet", *map(str, logs), "-j", "2", "-o", str(out)],
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
         text=True,

@@ -9,10 +9,12 @@ def main() -> None:
     """Runs ``ulog`` with the process's arguments and exits with its code."""
     from . import _ulog
 
-    # As the native `ulog`: Ctrl-C ends the tool (`ulog parquet` sets its own handler, and
-    # finishes the logs under way). Python's handler would run only when the Rust tool
-    # returned, after every log of a long run.
-    if threading.current_thread() is threading.main_thread():
+    # The process is the tool: Ctrl-C and SIGTERM stop it as they stop the Rust binary
+    # (`ulog parquet` finishes the logs under way and exits 130; the other verbs end at
+    # once). Python's own handler would run only once the tool returned, after every log of
+    # a long run, and then end it with a traceback.
+    main_thread = threading.current_thread() is threading.main_thread()
+    if main_thread:
         signal.signal(signal.SIGINT, signal.SIG_DFL)
     sys.stdout.flush()
-    sys.exit(_ulog.cli_main(["ulog"] + sys.argv[1:]))
+    sys.exit(_ulog.cli_main(["ulog"] + sys.argv[1:], as_process=main_thread))

@@ -338,10 +338,10 @@ def to_parquet(
     ValueError for a bound that is NaN, infinite or beyond any time a log can hold (2^64 µs;
     a window after a log's rows is a warning, not an error), an ``end`` at or
     before ``start``, an empty ``topics`` or a ``threads`` below 1 (TypeError for one that
-    is not an integer). The GIL is released while converting; Ctrl-C (any signal whose
-    handler raises) stops the conversion after the logs being converted, whose files are
-    whole, leaves the logs not started alone, and raises the handler's exception
-    (``KeyboardInterrupt``)."""
+    is not an integer). The GIL is released while converting; called from the main thread
+    (where Python runs signal handlers), Ctrl-C (any signal whose handler raises) stops the
+    conversion after the logs under way, whose files are whole, leaves the logs not started
+    alone, and raises the handler's exception (``KeyboardInterrupt``) once they are done."""
     if isinstance(paths, (str, os.PathLike)):
         paths = [paths]
     if isinstance(topics, str):

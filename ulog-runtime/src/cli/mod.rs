@@ -1,6 +1,7 @@
 //! The `ulog` command-line tool (feature `cli`): inspect, export and generate from PX4 ULog
 //! files, with pyulog's tools' options and output. [`main`] runs it on a list of arguments
-//! (the `ulog` binary and the Python package's `ulog` command are one line over it). One
+//! (the `ulog` binary and the Python package's `ulog` command are a line or two over it,
+//! [`handle_signals`] first). One
 //! file per verb, each a thin layer over library calls; this file holds what they share:
 //! opening logs, checking topic names, errors, progress. The verbs' doc comments are
 //! clap's help text.
@@ -26,6 +27,9 @@ mod messages;
 mod params;
 mod parquet;
 mod report;
+mod signals;
+
+pub use signals::handle_signals;
 
 /// Inspect, export and generate code from PX4 ULog (.ulg) flight logs.
 #[derive(Parser)]
@@ -138,8 +142,9 @@ fn pyulog_aliases(args: impl Iterator<Item = OsString>) -> Vec<OsString> {
 
 /// Runs `ulog` with `args` (the first is the program's name, as `std::env::args_os` gives
 /// it): its output on stdout, errors on stderr; returns the exit code (0 success, 1 a
-/// failure, 2 a usage error; `--help` and `--version` print and return 0). Never exits the
-/// process.
+/// failure, 2 a usage error, 128 + a signal's number when [`handle_signals`] let the signal
+/// stop `ulog parquet`; `--help` and `--version` print and return 0). Never exits the
+/// process, and sets no signal handler.
 pub fn main(args: impl IntoIterator<Item = impl Into<OsString>>) -> u8 {
     let args = pyulog_aliases(args.into_iter().map(Into::into));
     let cli = match Cli::try_parse_from(args) {

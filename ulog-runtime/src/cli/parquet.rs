@@ -4,7 +4,7 @@
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::columns::parquet::{ConvertError, Converter, Layout, ParquetOptions};
 
@@ -103,8 +103,10 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
     let threads = args
         .jobs
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let (stop, signal) = stop_on_signals();
-    let results = converter.convert_files_until(&args.files, threads, &stop);
+    let stop = super::signals::stoppable();
+    let results = converter.convert_files_until(&args.files, threads, stop.flag());
+    let stopped_by = stop.signal();
+    drop(stop);
     if progress {
         eprintln!();
     }
@@ -146,8 +148,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
             window.in_words()
         );
     }
-    if stopped > 0 {
-        let signal = signal.load(Ordering::Relaxed);
+    if let Some(signal) = stopped_by {
         let failed = if failed > 0 {
             format!(", {failed} failed")
         } else {
@@ -158,7 +159,7 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
             u8::try_from(128 + signal).unwrap_or(130),
             format!(
                 "stopped (signal {signal}): {stopped} of {} logs not converted{failed}; \
-                 those being converted were finished",
+                 those under way were finished",
                 args.files.len()
             ),
         ));
@@ -170,27 +171,6 @@ pub(crate) fn run(args: &Args, out: &mut impl Write) -> Result<(), Failure> {
         ));
     }
     Ok(())
-}
-
-/// A flag set at the first Ctrl-C (SIGINT) or SIGTERM, and the signal's number: no log is
-/// started after it, those being converted are finished (every log's files whole or not
-/// written). A second signal ends the tool at once (exit code 128 + the signal), as the
-/// signal alone would have. Where the handlers cannot be set, the signals end the tool at
-/// once, as before.
-fn stop_on_signals() -> (Arc<AtomicBool>, Arc<AtomicUsize>) {
-    let stop = Arc::new(AtomicBool::new(false));
-    let signal = Arc::new(AtomicUsize::new(0));
-    #[cfg(unix)]
-    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        use signal_hook::flag;
-        // The shutdown first: it acts only once the flag is set, at a second signal.
-        let _ = flag::register_conditional_shutdown(sig, 128 + sig, Arc::clone(&stop))
-            .and_then(|_| {
-                flag::register_usize(sig, Arc::clone(&signal), sig.unsigned_abs() as usize)
-            })
-            .and_then(|_| flag::register(sig, Arc::clone(&stop)));
-    }
-    (stop, signal)
 }
 
 /// A count of 1 or more (`-j`, `--buffer-mb`): 0 would convert nothing, or buffer nothing.

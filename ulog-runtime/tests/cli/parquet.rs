@@ -237,84 +237,133 @@ fn converted(out: &Path) -> Vec<String> {
     done
 }
 
+/// A log of `rows` rows of one topic, built by hand from the spec: 70 MB for 2.4 M rows,
+/// whose conversion lasts long enough (0.4 s in an optimized build) for signals to arrive
+/// while it is under way.
+fn long_log(path: &Path, rows: u64) {
+    let mut bytes = b"ULog\x01\x12\x35\x01".to_vec();
+    bytes.extend(0u64.to_le_bytes());
+    let mut message = |kind: u8, body: &[u8]| {
+        bytes.extend(u16::try_from(body.len()).unwrap().to_le_bytes());
+        bytes.push(kind);
+        bytes.extend(body);
+    };
+    message(b'F', b"t:uint64_t timestamp;float x;float y;double z;");
+    message(b'A', b"\x00\x00\x00t");
+    for i in 0..rows {
+        let mut row = vec![0, 0];
+        row.extend((1000 + i).to_le_bytes());
+        row.extend((i as f32).to_le_bytes());
+        row.extend((-(i as f32)).to_le_bytes());
+        row.extend((i as f64 / 4.0).to_le_bytes());
+        message(b'D', &row);
+    }
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// `ulog parquet -j 1` of `logs` into `out`, sent `signals` SIGINTs (50 ms apart) once the
+/// first log is converted: its exit code, stdout and stderr.
+#[cfg(unix)]
+fn interrupted(logs: &[PathBuf], out: &Path, signals: usize) -> (Option<i32>, String, String) {
+    let _ = std::fs::remove_dir_all(out);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_ulog"))
+        .arg("parquet")
+        .args(logs)
+        .args(["-j", "1", "-o"])
+        .arg(out)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    while converted(out).is_empty() && child.try_wait().unwrap().is_none() {
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+    for k in 0..signals {
+        if k > 0 {
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+        let kill = Command::new("kill")
+            .args(["-INT", &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(kill.success());
+    }
+    let run = child.wait_with_output().unwrap();
+    (
+        run.status.code(),
+        String::from_utf8_lossy(&run.stdout).into_owned(),
+        String::from_utf8_lossy(&run.stderr).into_owned(),
+    )
+}
+
 #[cfg(unix)]
 #[test]
-fn ctrl_c_stops_after_the_logs_being_converted_and_twice_at_once() {
+fn ctrl_c_stops_after_the_logs_under_way_and_twice_at_once() {
     let dir = temp_dir("parquet-ctrl-c");
-    let n = 100;
-    let first = small_log_of(&dir.join("logs"), "log000.ulg", 3000);
+    let n = 50;
+    // The first log small, the second long (the one under way when the signals come), the
+    // rest small; one at a time.
+    let small = small_log_of(&dir.join("logs"), "log00.ulg", 10);
     let logs: Vec<PathBuf> = (0..n)
         .map(|i| {
-            let p = dir.join(format!("logs/log{i:03}.ulg"));
-            if i > 0 {
-                std::fs::copy(&first, &p).unwrap();
+            let p = dir.join(format!("logs/log{i:02}.ulg"));
+            match i {
+                0 => {}
+                1 => long_log(&p, 2_400_000),
+                _ => {
+                    std::fs::copy(&small, &p).unwrap();
+                }
             }
             p
         })
         .collect();
     let out = dir.join("out");
-    for signals in [1, 2] {
-        let _ = std::fs::remove_dir_all(&out);
-        let mut child = Command::new(env!("CARGO_BIN_EXE_ulog"))
-            .arg("parquet")
-            .args(&logs)
-            .arg("-o")
-            .arg(&out)
-            .stdout(std::process::Stdio::piped())
-            .stderr(std::process::Stdio::piped())
-            .spawn()
-            .unwrap();
-        // Ctrl-C once a log is converted.
-        while converted(&out).is_empty() && child.try_wait().unwrap().is_none() {
-            std::thread::sleep(std::time::Duration::from_millis(1));
-        }
-        for _ in 0..signals {
-            let kill = Command::new("kill")
-                .args(["-INT", &child.id().to_string()])
-                .status()
-                .unwrap();
-            assert!(kill.success());
-        }
-        let run = child.wait_with_output().unwrap();
-        let stderr = String::from_utf8_lossy(&run.stderr);
-        assert_eq!(
-            run.status.code(),
-            Some(130),
-            "{signals} signal(s): {stderr}"
-        );
-        let done = converted(&out);
-        assert!(
-            !done.is_empty() && done.len() < n,
-            "{signals} signal(s): {} of {n} converted",
-            done.len()
-        );
-        if signals == 1 {
-            // The logs under way finished, whole; none started after.
-            let said = format!(
-                "stopped (signal 2): {} of {n} logs not converted",
-                n - done.len()
-            );
-            assert!(stderr.contains(&said), "{stderr}");
-            let listed = String::from_utf8_lossy(&run.stdout).lines().count();
-            assert_eq!(listed, done.len(), "each converted log listed");
-            let mut folders: Vec<String> = std::fs::read_dir(&out)
-                .unwrap()
-                .flatten()
-                .map(|d| d.file_name().to_string_lossy().into_owned())
-                .collect();
-            folders.sort();
-            assert_eq!(folders, done, "no folder of a log not converted");
-            for d in &done {
-                for f in std::fs::read_dir(out.join(d)).unwrap().flatten() {
-                    let name = f.file_name().to_string_lossy().into_owned();
-                    assert!(!name.ends_with(".partial"), "{d}/{name} left half-written");
-                }
-            }
-        } else {
-            // The second signal ended it at once: no summary.
-            assert!(!stderr.contains("stopped"), "{stderr}");
-        }
-    }
+
+    // Once: the long log is finished, whole; no log is started after it.
+    let (code, stdout, stderr) = interrupted(&logs, &out, 1);
+    assert_eq!(code, Some(130), "{stderr}");
+    assert_eq!(converted(&out), ["log00", "log01"]);
+    assert!(
+        stderr.contains(&format!(
+            "stopped (signal 2): {} of {n} logs not converted",
+            n - 2
+        )),
+        "{stderr}"
+    );
+    assert_eq!(
+        stdout.lines().count(),
+        2,
+        "each converted log listed: {stdout}"
+    );
+    let mut files: Vec<String> = std::fs::read_dir(out.join("log01"))
+        .unwrap()
+        .flatten()
+        .map(|f| f.file_name().to_string_lossy().into_owned())
+        .collect();
+    files.sort();
+    assert_eq!(
+        files,
+        ["metadata.json", "t_0.parquet"],
+        "nothing half-written"
+    );
+    let folders = std::fs::read_dir(&out).unwrap().count();
+    assert_eq!(folders, 2, "no folder of a log not converted");
+
+    // Twice: the second ends it at once, in the long log (no summary: the tool was ended).
+    let (code, _, stderr) = interrupted(&logs, &out, 2);
+    assert_eq!(code, Some(130), "{stderr}");
+    assert_eq!(converted(&out), ["log00"]);
+    assert!(!stderr.contains("stopped"), "{stderr}");
+
+    // Once, with every log started already: the one under way is finished, and the tool
+    // still says it was stopped (none left unconverted).
+    let (code, _, stderr) = interrupted(&logs[..2], &out, 1);
+    assert_eq!(code, Some(130), "{stderr}");
+    assert_eq!(converted(&out), ["log00", "log01"]);
+    assert!(
+        stderr.contains("stopped (signal 2): 0 of 2 logs not converted"),
+        "{stderr}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

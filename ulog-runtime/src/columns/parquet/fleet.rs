@@ -194,8 +194,8 @@ impl Converter {
 
     /// [`convert_files`](Self::convert_files), stopping when `stop` is set (by another
     /// thread, a signal handler's flag): no log is started after that, and each log not
-    /// started is [`ConvertError::Stopped`]. The logs being converted when it is set are
-    /// finished, so every log's files are either all written or not written at all.
+    /// started is [`ConvertError::Stopped`]. The logs under way when it is set are
+    /// finished: stopping leaves no log half-written.
     ///
     /// ```no_run
     /// # use std::path::PathBuf;
