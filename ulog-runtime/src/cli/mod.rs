@@ -56,6 +56,9 @@ enum Command {
     GpsDump(gps_dump::Args),
     /// Per-topic Parquet files and a metadata.json per log, many logs in parallel
     /// (`DIR/<stem>/<topic>_<multi_id>.parquet`, or hive partitions with `--layout hive`).
+    ///
+    /// On Unix, Ctrl-C (or SIGTERM) starts no more logs and finishes those under way, then
+    /// exits 130 (143); a second one ends the tool at once.
     Parquet(parquet::Args),
     /// Rows as JSON Lines (one object per row), or one JSON document.
     Json(json::Args),
