@@ -238,8 +238,9 @@ fn converted(out: &Path) -> Vec<String> {
 }
 
 /// A log of `rows` rows of one topic, built by hand from the spec: 70 MB for 2.4 M rows,
-/// whose conversion lasts long enough (0.4 s in an optimized build) for signals to arrive
-/// while it is under way.
+/// whose conversion lasts long enough for signals 50 ms apart to arrive while it is under
+/// way (`ulog parquet -j 1` of it: 0.5 to 0.65 s optimized, 6 s in a debug build, on the
+/// 2-core machine this was written on).
 fn long_log(path: &Path, rows: u64) {
     let mut bytes = b"ULog\x01\x12\x35\x01".to_vec();
     bytes.extend(0u64.to_le_bytes());
