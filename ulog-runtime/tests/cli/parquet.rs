@@ -224,6 +224,7 @@ fn small_log_of(dir: &Path, name: &str, seconds: u64) -> PathBuf {
 }
 
 /// The logs of `out` with a metadata.json (written last of a log's files).
+#[cfg(unix)]
 fn converted(out: &Path) -> Vec<String> {
     let Ok(dirs) = std::fs::read_dir(out) else {
         return Vec::new();
@@ -237,27 +238,34 @@ fn converted(out: &Path) -> Vec<String> {
     done
 }
 
-/// A log of `rows` rows of one topic, built by hand from the spec: 70 MB for 2.4 M rows,
-/// whose conversion lasts long enough for signals 50 ms apart to arrive while it is under
-/// way (`ulog parquet -j 1` of it: 0.5 to 0.65 s optimized, 6 s in a debug build, on the
-/// 2-core machine this was written on).
+/// A log of `rows` rows of one topic ([`hand_built`](super::hand_built)): 70 MB for 2.4 M
+/// rows, whose conversion lasts long enough for signals 50 ms apart to arrive while it is
+/// under way (`ulog parquet -j 1` of it: 0.5 to 0.65 s optimized, 6 s in a debug build, on
+/// the 2-core machine this was written on).
+#[cfg(unix)]
 fn long_log(path: &Path, rows: u64) {
-    let mut bytes = b"ULog\x01\x12\x35\x01".to_vec();
-    bytes.extend(0u64.to_le_bytes());
-    let mut message = |kind: u8, body: &[u8]| {
-        bytes.extend(u16::try_from(body.len()).unwrap().to_le_bytes());
-        bytes.push(kind);
-        bytes.extend(body);
-    };
-    message(b'F', b"t:uint64_t timestamp;float x;float y;double z;");
-    message(b'A', b"\x00\x00\x00t");
+    use ulog_runtime::read::Message;
+    let mut bytes = super::hand_built(&[
+        Message::Format(b"t:uint64_t timestamp;float x;float y;double z;"),
+        Message::Subscribe {
+            multi_id: 0,
+            msg_id: 0,
+            name: b"t",
+        },
+    ]);
+    let mut row = Vec::with_capacity(24);
     for i in 0..rows {
-        let mut row = vec![0, 0];
+        row.clear();
         row.extend((1000 + i).to_le_bytes());
         row.extend((i as f32).to_le_bytes());
         row.extend((-(i as f32)).to_le_bytes());
         row.extend((i as f64 / 4.0).to_le_bytes());
-        message(b'D', &row);
+        Message::Data {
+            msg_id: 0,
+            data: &row,
+        }
+        .encode(&mut bytes)
+        .unwrap();
     }
     std::fs::write(path, bytes).unwrap();
 }
